@@ -1,0 +1,87 @@
+// The model: everything about a scene that does not change while it runs. Const after loading.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "implicit_sim/core/shapes.h"
+
+namespace implicit_sim {
+
+// Friction of one contact (paper eq. 4-5): mu (-), e_t and e_o (-), e_r (m: largest torsional moment e_r mu f_n).
+struct FrictionParams {
+  double mu = 0.5;
+  double e_t = 1.0;
+  double e_o = 1.0;
+  double e_r = 0.1;
+};
+
+struct Body {
+  std::string name;             // the URDF link name
+  bool is_fixed = false;        // fixed to the world (pose X_WB0 forever)
+  double mass = 0.0;            // kg (moving bodies)
+  Mat3 I_B = Mat3::Zero();      // rotational inertia about the centre of mass, body frame (kg m^2)
+  ConvexShape shape;            // in the body frame B (origin at the centre of mass)
+  Pose X_BL = Pose::Identity(); // pose of the URDF link frame L in B (non-identity when <inertial> has an origin)
+  Pose X_WB0 = Pose::Identity();  // initial pose of B in the world W
+  Vec3 v_WB0 = Vec3::Zero();    // initial linear velocity of the centre of mass, world frame (m/s)
+  Vec3 w_WB0 = Vec3::Zero();    // initial angular velocity, world frame (rad/s)
+  Vec3 f_applied_W = Vec3::Zero();  // constant applied force at the centre of mass, world frame (N)
+  Vec3 tau_applied_W = Vec3::Zero();  // constant applied torque, world frame (N m)
+  // Locked degrees of freedom in world axes: vx vy vz wx wy wz; a locked velocity stays 0.
+  std::array<bool, 6> locked{{false, false, false, false, false, false}};
+};
+
+// A candidate contact between body1 and body2 (indices into Model::bodies). body1 is always a moving body.
+struct ContactPair {
+  int body1 = -1;
+  int body2 = -1;
+  FrictionParams friction;
+  std::string name;  // "<link1>-<link2>"
+};
+
+struct Model {
+  std::vector<Body> bodies;
+  std::vector<ContactPair> pairs;
+  std::vector<int> moving_bodies;  // indices of the moving bodies, in URDF order: velocity slot k -> body index
+  std::vector<int> velocity_slot;  // body index -> velocity slot, -1 for fixed bodies
+  Vec3 gravity_W = Vec3(0.0, 0.0, -9.81);  // m/s^2
+  std::string scene_name;
+
+  int num_moving() const { return static_cast<int>(moving_bodies.size()); }
+  int FindBody(const std::string& name) const;  // -1 if absent
+  // Builds moving_bodies, velocity_slot and one pair for every two bodies with shapes of which at least one moves.
+  // `pair_friction(i, j)` gives the friction of the pair; bodies must already be filled in.
+  template <typename FrictionOf>
+  void Finalize(FrictionOf pair_friction);
+  // A force scale (N) for the solver's row scaling: the largest weight plus applied force of a moving body, >= 1e-3.
+  double ForceScale() const;
+};
+
+template <typename FrictionOf>
+void Model::Finalize(FrictionOf pair_friction) {
+  moving_bodies.clear();
+  velocity_slot.assign(bodies.size(), -1);
+  for (int i = 0; i < static_cast<int>(bodies.size()); ++i) {
+    if (!bodies[i].is_fixed) {
+      velocity_slot[i] = static_cast<int>(moving_bodies.size());
+      moving_bodies.push_back(i);
+    }
+  }
+  pairs.clear();
+  for (int i = 0; i < static_cast<int>(bodies.size()); ++i) {
+    for (int j = i + 1; j < static_cast<int>(bodies.size()); ++j) {
+      if (bodies[i].is_fixed && bodies[j].is_fixed) continue;
+      if (bodies[i].shape.inequalities.empty() || bodies[j].shape.inequalities.empty()) continue;
+      ContactPair pair;
+      pair.body1 = bodies[i].is_fixed ? j : i;  // body1 moves
+      pair.body2 = bodies[i].is_fixed ? i : j;
+      pair.friction = pair_friction(pair.body1, pair.body2);
+      pair.name = bodies[pair.body1].name + "-" + bodies[pair.body2].name;
+      pairs.push_back(pair);
+    }
+  }
+}
+
+}  // namespace implicit_sim

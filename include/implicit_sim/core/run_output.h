@@ -1,0 +1,48 @@
+// Headless outputs of a run: the trajectory CSV (one row per step, t = 0 included) and the summary JSON.
+// Column names are a contract (README.md): t; per moving body B: B.x B.y B.z B.qw B.qx B.qy B.qz B.vx B.vy B.vz
+// B.wx B.wy B.wz; per pair P = <link1>-<link2>: P.gap P.fn P.ft P.mr P.slip; step.iterations step.residual
+// step.converged. Numbers are written locale-independently (shortest round-trip form, '.' as decimal point).
+#pragma once
+
+#include <fstream>
+#include <string>
+
+#include "implicit_sim/core/model.h"
+#include "implicit_sim/core/time_stepper.h"
+
+namespace implicit_sim {
+
+std::string FormatNumber(double value);
+
+// Accumulates the figures of summary.json while a run goes on.
+struct RunSummary {
+  std::string scene;
+  double h = 0.0;
+  int steps = 0;
+  double wall_s = 0.0;                 // time spent in Step (s)
+  double max_penetration = 0.0;        // max over steps and pairs of max(0, -gap) (m)
+  int nonconverged_steps = 0;
+  int cold_restarts = 0;
+  int max_iterations = 0;
+  double max_residual = 0.0;
+  double kinetic_energy_initial = 0.0; // J
+  double kinetic_energy_final = 0.0;   // J
+  void Add(const StepReport& report, const Data& data);
+  std::string ToJson() const;
+};
+
+class TrajectoryWriter {
+ public:
+  // Throws std::runtime_error if the file cannot be written.
+  TrajectoryWriter(const std::string& path, const Model& model);
+  // The t = 0 row: gaps from the distance oracle, forces and slip unknown (written as nan).
+  void WriteInitial(const State& state);
+  void WriteStep(const State& state, const Data& data, const StepReport& report);
+
+ private:
+  void WriteBodies(const State& state);
+  const Model& model_;
+  std::ofstream out_;
+};
+
+}  // namespace implicit_sim

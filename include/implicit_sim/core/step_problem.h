@@ -1,0 +1,134 @@
+// The mixed nonlinear complementarity problem of one geometrically implicit step (paper eq. 10-11 and Appendix
+// eq. 19-22), in the normal-distance form of DESIGN.md section 2, reformulated with the Fischer-Burmeister function.
+//
+// Unknowns z (everything at the END of the step):
+//   per moving body (slot k): nu_k = (v_WB, w_WB), 6 values, at z[6k].
+//   per contact pair c, a block at offset(c):
+//     a1 (3), a2 (3)     closest points on body 1 and body 2, world frame (m)
+//     n (3)              unit normal from body 2 towards body 1
+//     d                  signed distance along n: a1 - a2 = d n (m); d >= 0 means no interpenetration
+//     s_t, s_o, s_r      friction as fractions of the friction ellipsoid: force along t = mu e_t ln s_t (N), along o
+//                        = mu e_o ln s_o (N), torsional moment about n = mu e_r ln s_r (N m)
+//     alpha (K1)         multipliers of body 1's inequalities: -n = sum alpha_i grad f_i(a1)
+//     beta (K2)          multipliers of body 2's inequalities:  n = sum beta_j grad g_j(a2)
+//     ln                 normal force (N)
+//     sigma              slip multiplier (m/s): the generalized slip speed at a sliding contact
+// Equations (rows), scaled so that each is O(1) with the force scale Fs of the model:
+//   body rows     M (nu - nu0)/h - f_app - f_gyro - sum W lambda = 0, divided by Fs (paper eq. 1, impulse form / h)
+//   pair rows     a1 - a2 - d n = 0;  n - sum beta grad g = 0;  -n - sum alpha grad f = 0;  (n.n - 1)/2 = 0
+//                 friction (paper eq. 10 with its typo fixed, divided by mu e ln so that it stays regular at ln = 0):
+//                   e_t (t.v_rel) + s_t sigma = 0,  e_o (o.v_rel) + s_o sigma = 0,  e_r (n.w_rel) + s_r sigma = 0
+//                 complementarity (paper eq. 11 and 19), as FB(a, b) = a + b - sqrt(a^2 + b^2) = 0:
+//                   alpha_i _|_ -f_i(a1),  beta_j _|_ -g_j(a2),  ln / Fs _|_ d,  sigma _|_ zeta,
+//                   zeta = 1 - s_t^2 - s_o^2 - s_r^2 (the friction ellipsoid of eq. 5 divided by (mu ln)^2)
+// Why the normalized friction unknowns (an improvement on the paper's p_t, p_o, p_r): with forces as unknowns a
+// separated contact (ln = 0) leaves sigma and the friction forces undetermined and Newton converges only linearly
+// there (DESIGN.md pitfall 2). With fractions, sigma equals the generalized slip speed even at a separated
+// contact and every friction row keeps a regular Jacobian; for ln > 0 the two forms are equivalent.
+// Body 1 and body 2 are at their end-of-step poses p = p0 + h v, R = Exp(h w) R0 (paper eq. 2), so every
+// geometric quantity depends on nu: that is what makes the step geometrically implicit.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "implicit_sim/core/model.h"
+#include "implicit_sim/core/state.h"
+
+namespace implicit_sim {
+
+// Indices inside one pair block (see above).
+namespace pair_index {
+constexpr int kA1 = 0, kA2 = 3, kN = 6, kD = 9, kSt = 10, kSo = 11, kSr = 12, kAlpha = 13;
+}
+
+struct PairBlock {
+  int offset = 0;   // index of the block in z and in the rows
+  int k1 = 0;       // number of inequalities of body 1
+  int k2 = 0;       // number of inequalities of body 2
+  int size() const { return 13 + k1 + k2 + 2; }
+  int beta() const { return offset + pair_index::kAlpha + k1; }
+  int ln() const { return offset + pair_index::kAlpha + k1 + k2; }
+  int sigma() const { return ln() + 1; }
+};
+
+// Contact quantities at the end of a step, derived from a solution z.
+struct ContactResult {
+  Vec3 p_WA1 = Vec3::Zero(), p_WA2 = Vec3::Zero();  // closest points (m)
+  Vec3 n_W = Vec3::UnitZ();                          // unit normal from body 2 towards body 1
+  double gap = 0.0;                                  // signed distance d (m)
+  double normal_force = 0.0;                         // N
+  Vec3 friction_force_W = Vec3::Zero();              // tangential force on body 1 (N)
+  double torsional_moment = 0.0;                     // about n (N m)
+  double slip_speed = 0.0;                           // tangential relative speed at the contact (m/s)
+};
+
+class StepProblem {
+ public:
+  explicit StepProblem(const Model& model);
+
+  int size() const { return size_; }
+  const std::vector<PairBlock>& blocks() const { return blocks_; }
+
+  // Stores the start-of-step quantities (poses, inertia, gyroscopic terms) and the tangent reference axis of each
+  // pair: the world axis least aligned with the normal in `z_guess` (DESIGN.md pitfall 3), fixed for the whole step.
+  void BeginStep(const Model& model, const State& start, double h, const Eigen::VectorXd& z_guess);
+
+  // The FB-reformulated residual Phi(z) and, if J is not null, its exact generalized Jacobian (n x n, dense).
+  void Evaluate(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J);
+
+  // The largest |min(a, b)| over all complementarity pairs (in their scaled units).
+  double ComplementarityError(const Eigen::VectorXd& z);
+
+  ContactResult Contact(int pair, const Eigen::VectorXd& z);
+
+  // End-of-step pose of body b for velocities in z.
+  Pose EndPose(int body, const Eigen::VectorXd& z) const;
+
+  double force_scale() const { return force_scale_; }
+
+ private:
+  struct BodyStep {   // per body, for the current step
+    Vec3 p0 = Vec3::Zero();
+    Mat3 R0 = Mat3::Identity();
+    Vec3 v0 = Vec3::Zero(), w0 = Vec3::Zero();
+    Mat3 I_W0 = Mat3::Zero();       // world inertia at the start of the step (kg m^2)
+    Vec3 gyro_W = Vec3::Zero();     // w0 x I_W0 w0 (explicit gyroscopic term, N m)
+  };
+  struct BodyEnd {    // per body, for the current iterate
+    Vec3 p = Vec3::Zero();
+    Mat3 R = Mat3::Identity();
+    Vec3 v = Vec3::Zero(), w = Vec3::Zero();
+    Mat3 dtheta_dw = Mat3::Zero();  // h J_l(h w): rotation increment per change of w
+    int col = -1;                   // column of v in z (w at col + 3), -1 when fixed
+  };
+  struct Eval {       // one inequality evaluated at a world point
+    double f;
+    Vec3 g;           // world gradient
+    Mat3 H;           // world Hessian
+  };
+
+  void UpdateBodies(const Eigen::VectorXd& z);
+  Eval EvaluateInequality(int body, int k, const Vec3& p_W) const;
+  void AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J) const;
+  void AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J) const;
+  struct ContactWrench {  // the contact force F on body 1 and the torsional moment lr about n, with derivatives
+    Vec3 n, F, dF_dln, dF_dst, dF_dso;
+    Mat3 dF_dn;
+    double lr, dlr_dln, dlr_dsr;
+  };
+  void AddContactWrench(int c, int body, double sign, const Vec3& r, const ContactWrench& wrench,
+                        Eigen::VectorXd* Phi, Eigen::MatrixXd* J) const;
+
+  const Model& model_;
+  std::vector<PairBlock> blocks_;
+  std::vector<BodyStep> start_;
+  std::vector<BodyEnd> end_;
+  std::vector<Vec3> tangent_axis_;   // per pair
+  int size_ = 0;
+  double h_ = 0.0;
+  double force_scale_ = 1.0;
+};
+
+}  // namespace implicit_sim

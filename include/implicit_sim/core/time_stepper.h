@@ -1,0 +1,59 @@
+// The geometrically implicit time stepper: one mixed NCP per step (paper Sections III-IV), solved by semismooth
+// Newton. Usage:
+//   StepperOptions options;  options.h = 0.01;
+//   Data data(model);        // every derived quantity and the solver workspace, allocated once
+//   State state = State::Initial(model);
+//   StepReport report = Step(model, options, &state, &data);
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "implicit_sim/core/model.h"
+#include "implicit_sim/core/ncp_solver.h"
+#include "implicit_sim/core/state.h"
+#include "implicit_sim/core/step_problem.h"
+
+namespace implicit_sim {
+
+struct StepperOptions {
+  double h = 0.01;                // time step (s), in (0, 1]
+  NewtonOptions newton;
+  double contact_threshold = 1e-9;  // a pair counts as an active contact when its normal force exceeds this (N)
+  bool IsValid(std::string* error) const;
+};
+
+struct StepReport {
+  bool converged = false;       // the NCP was solved to tolerance
+  bool advanced = false;        // the state was advanced (false only when no finite solution was found)
+  bool cold_restart = false;    // the warm-started solve failed and a cold start was tried
+  int iterations = 0;           // Newton iterations, all attempts
+  double residual = 0.0;        // |Phi|_2 of the accepted solution
+  double complementarity_error = 0.0;
+  int active_contacts = 0;      // pairs with normal force > contact_threshold
+  double wall_time_s = 0.0;
+};
+
+class Data {
+ public:
+  explicit Data(const Model& model);
+  StepProblem problem;
+  SemismoothNewton solver;
+  Eigen::VectorXd z;            // the last solution (warm start of the next step)
+  Eigen::VectorXd z_start;      // the initial guess of the current step
+  bool has_warm_start = false;
+  std::vector<ContactResult> contacts;  // per pair, at the end of the last step
+  StepReport report;
+};
+
+// Advances *state by one step of options.h. Throws std::invalid_argument for invalid options or a state whose sizes
+// do not match the model (and then changes nothing); solver trouble is reported, never thrown.
+StepReport Step(const Model& model, const StepperOptions& options, State* state, Data* data);
+
+// Fills the contact block of pair c in z from closest points computed at the configuration `state` by the distance
+// oracle (cold start), with multipliers consistent with the normal and zero forces except a normal force guess.
+void SeedPair(const Model& model, const State& state, int c, const StepProblem& problem, Eigen::VectorXd* z);
+
+}  // namespace implicit_sim

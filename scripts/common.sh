@@ -1,0 +1,35 @@
+# Shared by scripts/demo and scripts/test: install Debian packages, build the catkin workspace.
+# Source it; it sets WS (the catkin workspace, default /tmp/implicit_sim_ws) and REPO.
+REPO=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+WS=${IMPLICIT_SIM_WS:-/tmp/implicit_sim_ws}
+# Debian's python3 first: a pyenv python on PATH breaks catkin and rostest (../shared/ROS1_DEBIAN.md pitfalls 1-2).
+export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
+export ROS_HOME=$WS/.ros ROS_LOG_DIR=$WS/.ros/log ROS_HOSTNAME=localhost
+
+APT_PACKAGES="build-essential cmake pkg-config googletest libgtest-dev catkin libroscpp-dev libtf2-ros-dev
+  libgeometry-msgs-dev ros-geometry-msgs libvisualization-msgs-dev libstd-msgs-dev ros-std-msgs libstd-srvs-dev
+  libros-rosgraph-msgs-dev ros-message-generation ros-message-runtime librostest-dev python3-rostest
+  libeigen3-dev coinor-libipopt-dev liburdfdom-dev libtinyxml2-dev"
+
+install_packages() {
+  local missing=""
+  for p in $APT_PACKAGES; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
+  done
+  if [ -n "$missing" ]; then
+    echo "[implicit_sim] installing:$missing"
+    local sudo=""
+    [ "$(id -u)" = 0 ] || sudo=sudo
+    export DEBIAN_FRONTEND=noninteractive
+    $sudo apt-get update
+    $sudo apt-get -o DPkg::Lock::Timeout=900 install -y --no-install-recommends $missing
+  fi
+}
+
+build_workspace() {
+  mkdir -p "$WS/src"
+  ln -sfn "$REPO" "$WS/src/implicit_sim"
+  (cd "$WS" && catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE=RelWithDebInfo -j2 >"$WS/build.log" 2>&1) || {
+    tail -n 60 "$WS/build.log"; echo "[implicit_sim] build failed (full log: $WS/build.log)"; return 1; }
+  echo "[implicit_sim] built in $WS"
+}

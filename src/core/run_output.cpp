@@ -1,0 +1,92 @@
+#include "implicit_sim/core/run_output.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <stdexcept>
+
+#include "implicit_sim/core/distance_oracle.h"
+
+namespace implicit_sim {
+
+std::string FormatNumber(double value) {
+  if (std::isnan(value)) return "nan";
+  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  return std::string(buffer, result.ptr);
+}
+
+void RunSummary::Add(const StepReport& report, const Data& data) {
+  ++steps;
+  wall_s += report.wall_time_s;
+  if (!report.converged) ++nonconverged_steps;
+  if (report.cold_restart) ++cold_restarts;
+  max_iterations = std::max(max_iterations, report.iterations);
+  max_residual = std::max(max_residual, report.residual);
+  for (const ContactResult& contact : data.contacts) max_penetration = std::max(max_penetration, -contact.gap);
+}
+
+std::string RunSummary::ToJson() const {
+  const double us_per_step = steps > 0 ? 1e6 * wall_s / steps : 0.0;
+  std::string json = "{\n";
+  json += "  \"scene\": \"" + scene + "\",\n";
+  json += "  \"h\": " + FormatNumber(h) + ",\n";
+  json += "  \"steps\": " + std::to_string(steps) + ",\n";
+  json += "  \"wall_s\": " + FormatNumber(wall_s) + ",\n";
+  json += "  \"us_per_step\": " + FormatNumber(us_per_step) + ",\n";
+  json += "  \"max_penetration\": " + FormatNumber(max_penetration) + ",\n";
+  json += "  \"nonconverged_steps\": " + std::to_string(nonconverged_steps) + ",\n";
+  json += "  \"cold_restarts\": " + std::to_string(cold_restarts) + ",\n";
+  json += "  \"max_iterations\": " + std::to_string(max_iterations) + ",\n";
+  json += "  \"max_residual\": " + FormatNumber(max_residual) + ",\n";
+  json += "  \"kinetic_energy_initial\": " + FormatNumber(kinetic_energy_initial) + ",\n";
+  json += "  \"kinetic_energy_final\": " + FormatNumber(kinetic_energy_final) + "\n";
+  return json + "}\n";
+}
+
+TrajectoryWriter::TrajectoryWriter(const std::string& path, const Model& model) : model_(model), out_(path) {
+  if (!out_) throw std::runtime_error("cannot write '" + path + "'");
+  out_ << "t";
+  for (int b : model.moving_bodies) {
+    for (const char* c : {"x", "y", "z", "qw", "qx", "qy", "qz", "vx", "vy", "vz", "wx", "wy", "wz"}) {
+      out_ << ',' << model.bodies[b].name << '.' << c;
+    }
+  }
+  for (const ContactPair& pair : model.pairs) {
+    for (const char* c : {"gap", "fn", "ft", "mr", "slip"}) out_ << ',' << pair.name << '.' << c;
+  }
+  out_ << ",step.iterations,step.residual,step.converged\n";
+}
+
+void TrajectoryWriter::WriteBodies(const State& state) {
+  out_ << FormatNumber(state.t);
+  for (int k = 0; k < model_.num_moving(); ++k) {
+    for (int i = 0; i < 7; ++i) out_ << ',' << FormatNumber(state.q[7 * k + i]);
+    for (int i = 0; i < 6; ++i) out_ << ',' << FormatNumber(state.v[6 * k + i]);
+  }
+}
+
+void TrajectoryWriter::WriteInitial(const State& state) {
+  WriteBodies(state);
+  for (const ContactPair& pair : model_.pairs) {
+    const ClosestPointsResult cp =
+        ComputeClosestPoints(model_.bodies[pair.body1].shape, state.X_WB(model_, pair.body1),
+                             model_.bodies[pair.body2].shape, state.X_WB(model_, pair.body2));
+    out_ << ',' << FormatNumber(cp.solved ? cp.distance : std::nan("")) << ",nan,nan,nan,nan";
+  }
+  out_ << ",0,0,1\n";
+}
+
+void TrajectoryWriter::WriteStep(const State& state, const Data& data, const StepReport& report) {
+  WriteBodies(state);
+  for (const ContactResult& c : data.contacts) {
+    out_ << ',' << FormatNumber(c.gap) << ',' << FormatNumber(c.normal_force) << ','
+         << FormatNumber(c.friction_force_W.norm()) << ',' << FormatNumber(c.torsional_moment) << ','
+         << FormatNumber(c.slip_speed);
+  }
+  out_ << ',' << report.iterations << ',' << FormatNumber(report.residual) << ',' << (report.converged ? 1 : 0)
+       << '\n';
+}
+
+}  // namespace implicit_sim

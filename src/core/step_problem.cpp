@@ -1,0 +1,367 @@
+#include "implicit_sim/core/step_problem.h"
+
+#include <cmath>
+
+#include "implicit_sim/core/rotation.h"
+
+namespace implicit_sim {
+namespace pi = pair_index;
+namespace {
+
+// Fischer-Burmeister function and an element of its generalized Jacobian (at a = b = 0 any point of the
+// subdifferential works; we take the one on the diagonal).
+struct FB {
+  double value, da, db;
+};
+FB FischerBurmeister(double a, double b) {
+  const double r = std::hypot(a, b);
+  if (r < 1e-14) return {a + b - r, 1.0 - 1.0 / std::sqrt(2.0), 1.0 - 1.0 / std::sqrt(2.0)};
+  return {a + b - r, 1.0 - a / r, 1.0 - b / r};
+}
+
+// Tangent basis (t, o) from the normal n and a reference axis e fixed for the step (DESIGN.md pitfall 3):
+// t = (e - (e.n) n) / |e - (e.n) n|, o = n x t, with their derivatives with respect to n.
+void TangentBasis(const Vec3& n, const Vec3& e, Vec3* t, Vec3* o, Mat3* dt_dn, Mat3* do_dn) {
+  const Vec3 u = e - e.dot(n) * n;
+  const double len = u.norm();
+  *t = u / len;
+  *o = n.cross(*t);
+  const Mat3 du_dn = -e.dot(n) * Mat3::Identity() - n * e.transpose();
+  *dt_dn = (Mat3::Identity() - (*t) * t->transpose()) / len * du_dn;
+  *do_dn = -Skew(*t) + Skew(n) * (*dt_dn);
+}
+
+Vec3 LeastAlignedAxis(const Vec3& n) {
+  int axis;
+  n.cwiseAbs().minCoeff(&axis);
+  return Vec3::Unit(axis);
+}
+
+}  // namespace
+
+StepProblem::StepProblem(const Model& model)
+    : model_(model), start_(model.bodies.size()), end_(model.bodies.size()), force_scale_(model.ForceScale()) {
+  size_ = 6 * model.num_moving();
+  for (const ContactPair& pair : model.pairs) {
+    PairBlock block;
+    block.offset = size_;
+    block.k1 = static_cast<int>(model.bodies[pair.body1].shape.inequalities.size());
+    block.k2 = static_cast<int>(model.bodies[pair.body2].shape.inequalities.size());
+    blocks_.push_back(block);
+    size_ += block.size();
+  }
+  tangent_axis_.assign(model.pairs.size(), Vec3::UnitX());
+  for (size_t b = 0; b < model.bodies.size(); ++b) {
+    end_[b].col = model.velocity_slot[b] < 0 ? -1 : 6 * model.velocity_slot[b];
+  }
+}
+
+void StepProblem::BeginStep(const Model& model, const State& start, double h, const Eigen::VectorXd& z_guess) {
+  h_ = h;
+  for (size_t b = 0; b < model.bodies.size(); ++b) {
+    const Body& body = model.bodies[b];
+    const Pose X_WB = start.X_WB(model, static_cast<int>(b));
+    BodyStep& s = start_[b];
+    s.p0 = X_WB.translation();
+    s.R0 = X_WB.linear();
+    const int k = model.velocity_slot[b];
+    s.v0 = k < 0 ? Vec3::Zero() : start.v_WB(k);
+    s.w0 = k < 0 ? Vec3::Zero() : start.w_WB(k);
+    s.I_W0 = s.R0 * body.I_B * s.R0.transpose();
+    s.gyro_W = s.w0.cross(s.I_W0 * s.w0);
+  }
+  for (size_t c = 0; c < blocks_.size(); ++c) {
+    tangent_axis_[c] = LeastAlignedAxis(z_guess.segment<3>(blocks_[c].offset + pi::kN));
+  }
+}
+
+void StepProblem::UpdateBodies(const Eigen::VectorXd& z) {
+  for (size_t b = 0; b < end_.size(); ++b) {
+    BodyEnd& e = end_[b];
+    const BodyStep& s = start_[b];
+    if (e.col < 0) {
+      e.p = s.p0;
+      e.R = s.R0;
+      continue;
+    }
+    e.v = z.segment<3>(e.col);
+    e.w = z.segment<3>(e.col + 3);
+    e.p = s.p0 + h_ * e.v;                      // paper eq. 2, Euler step of the position
+    e.R = ExpSO3(h_ * e.w) * s.R0;              // and of the orientation, on SO(3)
+    e.dtheta_dw = h_ * LeftJacobianSO3(h_ * e.w);
+  }
+}
+
+Pose StepProblem::EndPose(int body, const Eigen::VectorXd& z) const {
+  const BodyStep& s = start_[body];
+  Pose X = Pose::Identity();
+  const int col = end_[body].col;
+  X.translation() = col < 0 ? s.p0 : Vec3(s.p0 + h_ * z.segment<3>(col));
+  X.linear() = col < 0 ? s.R0 : Mat3(ExpSO3(h_ * z.segment<3>(col + 3)) * s.R0);
+  return X;
+}
+
+StepProblem::Eval StepProblem::EvaluateInequality(int body, int k, const Vec3& p_W) const {
+  const ConvexShape& shape = model_.bodies[body].shape;
+  const BodyEnd& e = end_[body];
+  const Mat3 R_WS = e.R * shape.X_BS.linear();
+  const Vec3 p_WS = e.p + e.R * shape.X_BS.translation();
+  Eval out;
+  Vec3 g_S;
+  Mat3 H_S;
+  shape.inequalities[k].Evaluate(R_WS.transpose() * (p_W - p_WS), &out.f, &g_S, &H_S);
+  out.g = R_WS * g_S;
+  out.H = R_WS * H_S * R_WS.transpose();
+  return out;
+}
+
+void StepProblem::Evaluate(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J) {
+  UpdateBodies(z);
+  Phi->setZero(size_);
+  if (J) J->setZero(size_, size_);
+  AddBodyRows(z, Phi, J);
+  for (size_t c = 0; c < blocks_.size(); ++c) AddPair(static_cast<int>(c), z, Phi, J);
+  // Locked degrees of freedom: the row of a locked velocity becomes "velocity = 0".
+  for (int k = 0; k < model_.num_moving(); ++k) {
+    const Body& body = model_.bodies[model_.moving_bodies[k]];
+    for (int i = 0; i < 6; ++i) {
+      if (!body.locked[i]) continue;
+      (*Phi)[6 * k + i] = z[6 * k + i];
+      if (J) {
+        J->row(6 * k + i).setZero();
+        (*J)(6 * k + i, 6 * k + i) = 1.0;
+      }
+    }
+  }
+}
+
+// Newton-Euler in impulse form divided by h (paper eq. 1 discretized): force units, scaled by 1/Fs.
+void StepProblem::AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J) const {
+  const double Fs = force_scale_;
+  for (int k = 0; k < model_.num_moving(); ++k) {
+    const int b = model_.moving_bodies[k];
+    const Body& body = model_.bodies[b];
+    const BodyStep& s = start_[b];
+    const int row = 6 * k;
+    const Vec3 f_ext = body.mass * model_.gravity_W + body.f_applied_W;
+    Phi->segment<3>(row) = (body.mass * (z.segment<3>(row) - s.v0) / h_ - f_ext) / Fs;
+    Phi->segment<3>(row + 3) = (s.I_W0 * (z.segment<3>(row + 3) - s.w0) / h_ + s.gyro_W - body.tau_applied_W) / Fs;
+    if (J) {
+      J->block<3, 3>(row, row) += Mat3::Identity() * body.mass / (h_ * Fs);
+      J->block<3, 3>(row + 3, row + 3) += s.I_W0 / (h_ * Fs);
+    }
+  }
+}
+
+// Adds -sign * (F, r x F + lr n) / Fs to the body rows of `body` (sign +1 for body 1, -1 for body 2).
+void StepProblem::AddContactWrench(int c, int body, double sign, const Vec3& r, const ContactWrench& w,
+                                   Eigen::VectorXd* Phi, Eigen::MatrixXd* J) const {
+  const BodyEnd& e = end_[body];
+  if (e.col < 0) return;
+  const PairBlock& blk = blocks_[c];
+  const int off = blk.offset, row = e.col;
+  const int a_col = off + (sign > 0 ? pi::kA1 : pi::kA2);
+  const double s = sign / force_scale_;
+  Phi->segment<3>(row) -= s * w.F;
+  Phi->segment<3>(row + 3) -= s * (r.cross(w.F) + w.lr * w.n);
+  if (!J) return;
+  const Mat3 rx = Skew(r), Fx = Skew(w.F);
+  J->block<3, 3>(row, off + pi::kN) -= s * w.dF_dn;
+  J->block<3, 1>(row, blk.ln()) -= s * w.dF_dln;
+  J->block<3, 1>(row, off + pi::kSt) -= s * w.dF_dst;
+  J->block<3, 1>(row, off + pi::kSo) -= s * w.dF_dso;
+  J->block<3, 3>(row + 3, a_col) += s * Fx;           // d(r x F)/da = -[F]x
+  J->block<3, 3>(row + 3, e.col) -= s * h_ * Fx;      // r = a - p0 - h v
+  J->block<3, 3>(row + 3, off + pi::kN) -= s * (rx * w.dF_dn + w.lr * Mat3::Identity());
+  J->block<3, 1>(row + 3, blk.ln()) -= s * (rx * w.dF_dln + w.dlr_dln * w.n);
+  J->block<3, 1>(row + 3, off + pi::kSt) -= s * rx * w.dF_dst;
+  J->block<3, 1>(row + 3, off + pi::kSo) -= s * rx * w.dF_dso;
+  J->block<3, 1>(row + 3, off + pi::kSr) -= s * w.dlr_dsr * w.n;
+}
+
+void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J) const {
+  const ContactPair& pair = model_.pairs[c];
+  const FrictionParams& fr = pair.friction;
+  const PairBlock& blk = blocks_[c];
+  const int off = blk.offset;
+  const Vec3 a1 = z.segment<3>(off + pi::kA1), a2 = z.segment<3>(off + pi::kA2), n = z.segment<3>(off + pi::kN);
+  const double d = z[off + pi::kD], st = z[off + pi::kSt], so = z[off + pi::kSo], sr = z[off + pi::kSr];
+  const double ln = z[blk.ln()], sigma = z[blk.sigma()];
+  const BodyEnd& e1 = end_[pair.body1];
+  const BodyEnd& e2 = end_[pair.body2];
+  const Vec3 r1 = a1 - e1.p, r2 = a2 - e2.p;
+  const Mat3 I3 = Mat3::Identity();
+  auto add = [J](int row, int col, const auto& block) {
+    if (J) J->block(row, col, block.rows(), block.cols()) += block;
+  };
+  auto add1 = [J](int row, int col, double value) {
+    if (J) (*J)(row, col) += value;
+  };
+
+  // a1 - a2 - d n = 0 (the closest points are d apart along n).
+  Phi->segment<3>(off) = a1 - a2 - d * n;
+  add(off, off + pi::kA1, I3);
+  add(off, off + pi::kA2, -I3);
+  add(off, off + pi::kN, -d * I3);
+  add(off, off + pi::kD, -n);
+
+  // Normal cones (Appendix eq. 20-22 in the normal form): n = sum beta grad g(a2), -n = sum alpha grad f(a1),
+  // with alpha_i _|_ -f_i(a1) and beta_j _|_ -g_j(a2).
+  struct Side {
+    int body, rows, a_col, mult_col, count;
+    double n_sign;
+    Vec3 a, r;
+    const BodyEnd* e;
+  };
+  const Side sides[2] = {{pair.body2, off + 3, off + pi::kA2, blk.beta(), blk.k2, 1.0, a2, r2, &e2},
+                         {pair.body1, off + 6, off + pi::kA1, off + pi::kAlpha, blk.k1, -1.0, a1, r1, &e1}};
+  for (const Side& side : sides) {
+    Phi->segment<3>(side.rows) = side.n_sign * n;
+    add(side.rows, off + pi::kN, side.n_sign * I3);
+    for (int k = 0; k < side.count; ++k) {
+      const Eval ev = EvaluateInequality(side.body, k, side.a);
+      const double mult = z[side.mult_col + k];
+      Phi->segment<3>(side.rows) -= mult * ev.g;
+      add(side.rows, side.mult_col + k, -ev.g);
+      add(side.rows, side.a_col, -mult * ev.H);
+      const FB fb = FischerBurmeister(mult, -ev.f);
+      const int fb_row = side.mult_col + k;
+      (*Phi)[fb_row] = fb.value;
+      add1(fb_row, side.mult_col + k, fb.da);
+      add(fb_row, side.a_col, Eigen::RowVector3d(-fb.db * ev.g.transpose()));
+      if (side.e->col >= 0) {  // the body moves: f and grad f depend on its end pose
+        const Mat3& dth = side.e->dtheta_dw;
+        add(side.rows, side.e->col, mult * h_ * ev.H);
+        add(side.rows, side.e->col + 3, Mat3(-mult * (ev.H * Skew(side.r) - Skew(ev.g)) * dth));
+        add(fb_row, side.e->col, Eigen::RowVector3d(fb.db * h_ * ev.g.transpose()));
+        add(fb_row, side.e->col + 3, Eigen::RowVector3d(fb.db * side.r.cross(ev.g).transpose() * dth));
+      }
+    }
+  }
+
+  // |n|^2 = 1.
+  (*Phi)[off + 9] = 0.5 * (n.squaredNorm() - 1.0);
+  add(off + 9, off + pi::kN, Eigen::RowVector3d(n.transpose()));
+
+  // Friction (paper eq. 10 with its typo fixed, divided by mu e ln): with the friction forces written as fractions of
+  // the friction ellipsoid, lt = mu e_t ln s_t (and s_o, s_r alike), the rows e_t (t.v_rel) + s_t sigma = 0,
+  // e_o (o.v_rel) + s_o sigma = 0, e_r (n.w_rel) + s_r sigma = 0 stay regular when ln = 0 (a separated contact).
+  Vec3 t, o;
+  Mat3 dt_dn, do_dn;
+  TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
+  const Vec3 v_rel = (e1.v + e1.w.cross(r1)) - (e2.v + e2.w.cross(r2));
+  const Vec3 w_rel = e1.w - e2.w;
+  // Adds coeff * u^T d(v_rel)/d(unknowns) to `row`.
+  auto add_rel_velocity = [&](int row, double coeff, const Vec3& u) {
+    const Side* both[2] = {&sides[1], &sides[0]};
+    for (int i = 0; i < 2; ++i) {
+      const Side& side = *both[i];
+      if (side.e->col < 0) continue;
+      const double s = i == 0 ? coeff : -coeff;
+      add(row, side.a_col, Eigen::RowVector3d(s * u.transpose() * Skew(side.e->w)));
+      add(row, side.e->col, Eigen::RowVector3d(s * u.transpose() * (I3 - h_ * Skew(side.e->w))));
+      add(row, side.e->col + 3, Eigen::RowVector3d(-s * u.transpose() * Skew(side.r)));
+    }
+  };
+  const int rt = off + 10, ro = off + 11, rr = off + 12;
+  (*Phi)[rt] = fr.e_t * t.dot(v_rel) + st * sigma;
+  (*Phi)[ro] = fr.e_o * o.dot(v_rel) + so * sigma;
+  (*Phi)[rr] = fr.e_r * n.dot(w_rel) + sr * sigma;
+  if (J) {
+    add(rt, off + pi::kN, Eigen::RowVector3d(fr.e_t * v_rel.transpose() * dt_dn));
+    add(ro, off + pi::kN, Eigen::RowVector3d(fr.e_o * v_rel.transpose() * do_dn));
+    add(rr, off + pi::kN, Eigen::RowVector3d(fr.e_r * w_rel.transpose()));
+    add_rel_velocity(rt, fr.e_t, t);
+    add_rel_velocity(ro, fr.e_o, o);
+    if (e1.col >= 0) add(rr, e1.col + 3, Eigen::RowVector3d(fr.e_r * n.transpose()));
+    if (e2.col >= 0) add(rr, e2.col + 3, Eigen::RowVector3d(-fr.e_r * n.transpose()));
+    add1(rt, off + pi::kSt, sigma);
+    add1(ro, off + pi::kSo, sigma);
+    add1(rr, off + pi::kSr, sigma);
+    add1(rt, blk.sigma(), st);
+    add1(ro, blk.sigma(), so);
+    add1(rr, blk.sigma(), sr);
+  }
+
+  // Non-penetration (paper eq. 11 with the signed distance d as gap): ln / Fs _|_ d.
+  const double Fs = force_scale_;
+  const FB fb_n = FischerBurmeister(ln / Fs, d);
+  (*Phi)[blk.ln()] = fb_n.value;
+  add1(blk.ln(), blk.ln(), fb_n.da / Fs);
+  add1(blk.ln(), off + pi::kD, fb_n.db);
+
+  // Friction ellipsoid (paper eq. 5 divided by (mu ln)^2): sigma _|_ 1 - s_t^2 - s_o^2 - s_r^2.
+  const FB fb_s = FischerBurmeister(sigma, 1.0 - st * st - so * so - sr * sr);
+  (*Phi)[blk.sigma()] = fb_s.value;
+  add1(blk.sigma(), blk.sigma(), fb_s.da);
+  add1(blk.sigma(), off + pi::kSt, -2.0 * fb_s.db * st);
+  add1(blk.sigma(), off + pi::kSo, -2.0 * fb_s.db * so);
+  add1(blk.sigma(), off + pi::kSr, -2.0 * fb_s.db * sr);
+
+  // The contact wrench on both bodies (paper eq. 1: W_n p_n + W_t p_t + W_o p_o + W_r p_r), with
+  // lt = mu e_t ln s_t, lo = mu e_o ln s_o, lr = mu e_r ln s_r.
+  ContactWrench w;
+  w.n = n;
+  const double mu = fr.mu;
+  const Vec3 friction_dir = mu * (fr.e_t * st * t + fr.e_o * so * o);
+  w.F = ln * (n + friction_dir);
+  w.dF_dn = ln * (I3 + mu * (fr.e_t * st * dt_dn + fr.e_o * so * do_dn));
+  w.dF_dln = n + friction_dir;
+  w.dF_dst = mu * fr.e_t * ln * t;
+  w.dF_dso = mu * fr.e_o * ln * o;
+  w.lr = mu * fr.e_r * ln * sr;
+  w.dlr_dln = mu * fr.e_r * sr;
+  w.dlr_dsr = mu * fr.e_r * ln;
+  AddContactWrench(c, pair.body1, +1.0, r1, w, Phi, J);
+  AddContactWrench(c, pair.body2, -1.0, r2, w, Phi, J);
+}
+
+double StepProblem::ComplementarityError(const Eigen::VectorXd& z) {
+  UpdateBodies(z);
+  double worst = 0.0;
+  for (size_t c = 0; c < blocks_.size(); ++c) {
+    const ContactPair& pair = model_.pairs[c];
+    const PairBlock& blk = blocks_[c];
+    const Vec3 a1 = z.segment<3>(blk.offset + pi::kA1), a2 = z.segment<3>(blk.offset + pi::kA2);
+    for (int k = 0; k < blk.k1; ++k) {
+      const double f = EvaluateInequality(pair.body1, k, a1).f;
+      worst = std::max(worst, std::abs(std::min(z[blk.offset + pi::kAlpha + k], -f)));
+    }
+    for (int k = 0; k < blk.k2; ++k) {
+      const double g = EvaluateInequality(pair.body2, k, a2).f;
+      worst = std::max(worst, std::abs(std::min(z[blk.beta() + k], -g)));
+    }
+    const double ln = z[blk.ln()];
+    const double zeta = 1.0 - z.segment<3>(blk.offset + pi::kSt).squaredNorm();
+    worst = std::max(worst, std::abs(std::min(ln / force_scale_, z[blk.offset + pi::kD])));
+    worst = std::max(worst, std::abs(std::min(z[blk.sigma()], zeta)));
+  }
+  return worst;
+}
+
+ContactResult StepProblem::Contact(int c, const Eigen::VectorXd& z) {
+  UpdateBodies(z);
+  const ContactPair& pair = model_.pairs[c];
+  const PairBlock& blk = blocks_[c];
+  const int off = blk.offset;
+  ContactResult out;
+  out.p_WA1 = z.segment<3>(off + pi::kA1);
+  out.p_WA2 = z.segment<3>(off + pi::kA2);
+  out.n_W = z.segment<3>(off + pi::kN);
+  out.gap = z[off + pi::kD];
+  out.normal_force = z[blk.ln()];
+  Vec3 t, o;
+  Mat3 dt_dn, do_dn;
+  TangentBasis(out.n_W, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
+  const FrictionParams& fr = pair.friction;
+  const double mu_ln = fr.mu * out.normal_force;
+  out.friction_force_W = mu_ln * (fr.e_t * z[off + pi::kSt] * t + fr.e_o * z[off + pi::kSo] * o);
+  out.torsional_moment = mu_ln * fr.e_r * z[off + pi::kSr];
+  const BodyEnd& e1 = end_[pair.body1];
+  const BodyEnd& e2 = end_[pair.body2];
+  const Vec3 v_rel = (e1.v + e1.w.cross(out.p_WA1 - e1.p)) - (e2.v + e2.w.cross(out.p_WA2 - e2.p));
+  out.slip_speed = (v_rel - v_rel.dot(out.n_W) * out.n_W).norm();
+  return out;
+}
+
+}  // namespace implicit_sim

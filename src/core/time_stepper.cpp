@@ -1,0 +1,158 @@
+#include "implicit_sim/core/time_stepper.h"
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "implicit_sim/core/distance_oracle.h"
+
+namespace implicit_sim {
+namespace pi = pair_index;
+
+bool StepperOptions::IsValid(std::string* error) const {
+  if (!(h > 0.0 && h <= 1.0)) {
+    *error = "time step h must be in (0, 1] s, got " + std::to_string(h);
+    return false;
+  }
+  if (!(contact_threshold >= 0.0 && std::isfinite(contact_threshold))) {
+    *error = "contact_threshold must be finite and >= 0 N, got " + std::to_string(contact_threshold);
+    return false;
+  }
+  return newton.IsValid(error);
+}
+
+Data::Data(const Model& model)
+    : problem(model),
+      solver(problem.size()),
+      z(Eigen::VectorXd::Zero(problem.size())),
+      z_start(Eigen::VectorXd::Zero(problem.size())),
+      contacts(model.pairs.size()) {}
+
+namespace {
+
+// The index of the inequality of `shape` (posed by X_WB) that is largest at p_W, and its unit outward normal.
+int MostActiveInequality(const ConvexShape& shape, const Pose& X_WB, const Vec3& p_W, Vec3* normal_W,
+                         double* grad_norm) {
+  const Pose X_WS = X_WB * shape.X_BS;
+  const Vec3 x_S = X_WS.inverse() * p_W;
+  int best = 0;
+  double best_f = -1e300;
+  for (int k = 0; k < static_cast<int>(shape.inequalities.size()); ++k) {
+    double f;
+    Vec3 g_S;
+    shape.inequalities[k].Evaluate(x_S, &f, &g_S, nullptr);
+    if (f > best_f && g_S.norm() > 1e-12) {
+      best_f = f;
+      best = k;
+      *grad_norm = g_S.norm();
+      *normal_W = X_WS.linear() * g_S / *grad_norm;
+    }
+  }
+  return best;
+}
+
+void WriteState(const Model& model, const StepProblem& problem, const Eigen::VectorXd& z, double h, State* state) {
+  for (int k = 0; k < model.num_moving(); ++k) {
+    const Pose X = problem.EndPose(model.moving_bodies[k], z);
+    Eigen::Quaterniond quat(X.linear());
+    const Eigen::Vector4d old = state->q.segment<4>(7 * k + 3);
+    if (quat.w() * old[0] + quat.x() * old[1] + quat.y() * old[2] + quat.z() * old[3] < 0.0) quat.coeffs() *= -1.0;
+    state->q.segment<3>(7 * k) = X.translation();
+    state->q.segment<4>(7 * k + 3) << quat.w(), quat.x(), quat.y(), quat.z();
+    state->v.segment<6>(6 * k) = z.segment<6>(6 * k);
+  }
+  state->t += h;
+}
+
+}  // namespace
+
+void SeedPair(const Model& model, const State& state, int c, const StepProblem& problem, Eigen::VectorXd* z) {
+  const ContactPair& pair = model.pairs[c];
+  const PairBlock& blk = problem.blocks()[c];
+  const Body& body1 = model.bodies[pair.body1];
+  const Body& body2 = model.bodies[pair.body2];
+  const Pose X_WB1 = state.X_WB(model, pair.body1), X_WB2 = state.X_WB(model, pair.body2);
+  const ClosestPointsResult cp = ComputeClosestPoints(body1.shape, X_WB1, body2.shape, X_WB2);
+  Vec3 p1 = cp.p_W1, p2 = cp.p_W2;
+  if (!cp.solved || !p1.allFinite() || !p2.allFinite()) {  // fall back to the body origins
+    p1 = X_WB1.translation();
+    p2 = X_WB2.translation();
+  }
+  Vec3 n, normal1;
+  double grad2 = 1.0, grad1 = 1.0;
+  const int k2 = MostActiveInequality(body2.shape, X_WB2, p2, &n, &grad2);
+  const int k1 = MostActiveInequality(body1.shape, X_WB1, p1, &normal1, &grad1);
+  if ((p1 - p2).norm() > 1e-9) n = (p1 - p2).normalized();
+  z->segment(blk.offset, blk.size()).setZero();
+  z->segment<3>(blk.offset + pi::kA1) = p1;
+  z->segment<3>(blk.offset + pi::kA2) = p2;
+  z->segment<3>(blk.offset + pi::kN) = n;
+  (*z)[blk.offset + pi::kD] = n.dot(p1 - p2);
+  (*z)[blk.offset + pi::kAlpha + k1] = 1.0 / grad1;
+  (*z)[blk.beta() + k2] = 1.0 / grad2;
+  (*z)[blk.ln()] = cp.distance < 1e-6 ? 0.5 * problem.force_scale() : 0.0;
+}
+
+StepReport Step(const Model& model, const StepperOptions& options, State* state, Data* data) {
+  std::string error;
+  if (!options.IsValid(&error)) throw std::invalid_argument(error);
+  if (state->q.size() != 7 * model.num_moving() || state->v.size() != 6 * model.num_moving()) {
+    throw std::invalid_argument("state size does not match the model: expected q of " +
+                                std::to_string(7 * model.num_moving()) + " and v of " +
+                                std::to_string(6 * model.num_moving()) + " values");
+  }
+  const auto wall_start = std::chrono::steady_clock::now();
+  StepReport report;
+  StepProblem& problem = data->problem;
+
+  auto cold_guess = [&]() {
+    data->z_start.head(6 * model.num_moving()) = state->v;
+    for (int c = 0; c < static_cast<int>(model.pairs.size()); ++c) SeedPair(model, *state, c, problem, &data->z_start);
+  };
+  auto solve_from_start = [&](Eigen::VectorXd* z) {
+    problem.BeginStep(model, *state, options.h, data->z_start);
+    *z = data->z_start;
+    return data->solver.Solve(&problem, options.newton, z);
+  };
+
+  if (data->has_warm_start) {
+    data->z_start = data->z;  // the previous step's solution; its velocities are the state's
+    data->z_start.head(6 * model.num_moving()) = state->v;
+  } else {
+    cold_guess();
+  }
+  NewtonResult result = solve_from_start(&data->z);
+  report.iterations = result.iterations;
+  if (!result.converged && data->has_warm_start) {
+    report.cold_restart = true;
+    const Eigen::VectorXd warm_solution = data->z, warm_start = data->z_start;  // failure path only
+    const NewtonResult warm_result = result;
+    cold_guess();
+    result = solve_from_start(&data->z);
+    report.iterations += result.iterations;
+    if (!(result.residual < warm_result.residual) && std::isfinite(warm_result.residual)) {
+      data->z = warm_solution;  // keep the better of the two attempts
+      result = warm_result;
+      problem.BeginStep(model, *state, options.h, warm_start);
+    }
+  }
+  report.converged = result.converged;
+  report.residual = result.residual;
+  if (std::isfinite(result.residual) && data->z.allFinite()) {
+    report.complementarity_error = problem.ComplementarityError(data->z);
+    for (int c = 0; c < static_cast<int>(model.pairs.size()); ++c) {
+      data->contacts[c] = problem.Contact(c, data->z);
+      if (data->contacts[c].normal_force > options.contact_threshold) ++report.active_contacts;
+    }
+    WriteState(model, problem, data->z, options.h, state);
+    data->has_warm_start = true;
+    report.advanced = true;
+  } else {
+    data->has_warm_start = false;  // the state is left as it was; the next step starts cold
+  }
+  report.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  data->report = report;
+  return report;
+}
+
+}  // namespace implicit_sim

@@ -1,0 +1,353 @@
+#include "implicit_sim/core/urdf_loader.h"
+
+#include <cmath>
+#include <fstream>
+#include <locale>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+#include <Eigen/Eigenvalues>
+#include <tinyxml2.h>
+#include <urdf_parser/urdf_parser.h>
+
+namespace implicit_sim {
+namespace {
+
+[[noreturn]] void Fail(const std::string& message) { throw std::invalid_argument(message); }
+
+// Numbers are read with the classic "C" locale whatever the process locale is.
+std::vector<double> ParseNumbers(const std::string& text, const std::string& what) {
+  std::istringstream in(text);
+  in.imbue(std::locale::classic());
+  std::vector<double> out;
+  std::string token;
+  while (in >> token) {
+    std::istringstream tin(token);
+    tin.imbue(std::locale::classic());
+    double value;
+    if (!(tin >> value) || !tin.eof()) Fail(what + ": '" + token + "' is not a number");
+    if (!std::isfinite(value)) Fail(what + ": value must be finite, got '" + token + "'");
+    out.push_back(value);
+  }
+  return out;
+}
+
+double ReadScalar(const tinyxml2::XMLElement* e, const char* name, const std::string& where, double lo, double hi,
+                  bool lo_open, double fallback, bool required) {
+  const char* text = e ? e->Attribute(name) : nullptr;
+  if (!text) {
+    if (required) Fail(where + ": missing attribute '" + name + "'");
+    return fallback;
+  }
+  const std::vector<double> v = ParseNumbers(text, where + " attribute '" + name + "'");
+  if (v.size() != 1) Fail(where + " attribute '" + name + "': expected one number");
+  const bool low_ok = lo_open ? v[0] > lo : v[0] >= lo;
+  if (!low_ok || v[0] > hi) {
+    std::ostringstream msg;
+    msg.imbue(std::locale::classic());
+    msg << where << " attribute '" << name << "' = " << v[0] << " is out of range " << (lo_open ? "(" : "[") << lo
+        << ", " << hi << "]";
+    Fail(msg.str());
+  }
+  return v[0];
+}
+
+Vec3 ReadVec3(const tinyxml2::XMLElement* e, const char* name, const std::string& where, const Vec3& fallback,
+              bool positive = false) {
+  const char* text = e ? e->Attribute(name) : nullptr;
+  if (!text) return fallback;
+  const std::vector<double> v = ParseNumbers(text, where + " attribute '" + name + "'");
+  if (v.size() != 3) Fail(where + " attribute '" + name + "': expected three numbers");
+  const Vec3 out(v[0], v[1], v[2]);
+  if (positive && out.minCoeff() <= 0.0) Fail(where + " attribute '" + name + "': every value must be > 0");
+  return out;
+}
+
+Pose ReadOrigin(const tinyxml2::XMLElement* e, const std::string& where) {
+  const Vec3 xyz = ReadVec3(e, "xyz", where, Vec3::Zero());
+  const Vec3 rpy = ReadVec3(e, "rpy", where, Vec3::Zero());
+  Pose X = Pose::Identity();
+  X.translation() = xyz;
+  X.linear() = (Eigen::AngleAxisd(rpy[2], Vec3::UnitZ()) * Eigen::AngleAxisd(rpy[1], Vec3::UnitY()) *
+                Eigen::AngleAxisd(rpy[0], Vec3::UnitX())).toRotationMatrix();
+  return X;
+}
+
+Pose ToPose(const urdf::Pose& p) {
+  Pose X = Pose::Identity();
+  X.translation() = Vec3(p.position.x, p.position.y, p.position.z);
+  X.linear() = Eigen::Quaterniond(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z).toRotationMatrix();
+  return X;
+}
+
+// One part of an <implicit type="intersection"> element.
+Inequality ReadPart(const tinyxml2::XMLElement* part, const std::string& where) {
+  const std::string kind = part->Name();
+  const std::string at = where + " <" + kind + ">";
+  Inequality q;
+  if (kind == "halfspace") {
+    const Vec3 normal = ReadVec3(part, "normal", at, Vec3::UnitZ());
+    if (normal.norm() < 1e-12) Fail(at + " attribute 'normal' must be non-zero");
+    return Inequality::HalfSpace(normal, ReadScalar(part, "offset", at, -1e9, 1e9, false, 0.0, false));
+  } else if (kind == "sphere") {
+    q = Inequality::Sphere(ReadScalar(part, "radius", at, 0.0, 1e6, true, 0.0, true));
+  } else if (kind == "ellipsoid") {
+    q = Inequality::Ellipsoid(ReadVec3(part, "semi_axes", at, Vec3::Zero(), true));
+  } else if (kind == "superellipsoid") {
+    q = Inequality::Superellipsoid(ReadVec3(part, "semi_axes", at, Vec3::Zero(), true),
+                                   ReadScalar(part, "exponent", at, 2.0, 100.0, false, 0.0, true));
+  } else if (kind == "cylinder") {
+    q = Inequality::InfiniteCylinder(ReadScalar(part, "radius", at, 0.0, 1e6, true, 0.0, true));
+  } else {
+    Fail(at + ": unknown part (allowed: halfspace, sphere, ellipsoid, superellipsoid, cylinder)");
+  }
+  if (q.radii.minCoeff() <= 0.0) Fail(at + ": 'semi_axes' is required and must be > 0");
+  q.X_SP = ReadOrigin(part, at);
+  return q;
+}
+
+// The implicit shape of a link from its <implicit> element or, without one, from the stock geometry.
+ConvexShape ReadShape(const std::string& link, const urdf::Collision& collision,
+                      const tinyxml2::XMLElement* implicit) {
+  const std::string where = "link '" + link + "' <implicit>";
+  if (!implicit) {
+    const urdf::Geometry* g = collision.geometry.get();
+    if (!g) Fail("link '" + link + "': <collision> has no usable <geometry>");
+    if (g->type == urdf::Geometry::SPHERE) return MakeSphere(static_cast<const urdf::Sphere*>(g)->radius);
+    if (g->type == urdf::Geometry::BOX) {
+      const urdf::Vector3& d = static_cast<const urdf::Box*>(g)->dim;
+      return MakeBox(Vec3(d.x, d.y, d.z) / 2.0);
+    }
+    if (g->type == urdf::Geometry::CYLINDER) {
+      const auto* c = static_cast<const urdf::Cylinder*>(g);
+      return MakeCylinder(c->radius, c->length / 2.0);
+    }
+    Fail("link '" + link + "': mesh collision geometry needs an <implicit> element");
+  }
+  const char* type_text = implicit->Attribute("type");
+  if (!type_text) Fail(where + ": missing attribute 'type'");
+  const std::string type = type_text;
+  if (type == "halfspace") return MakeHalfSpace();
+  if (type == "sphere") return MakeSphere(ReadScalar(implicit, "radius", where, 0.0, 1e6, true, 0.0, true));
+  if (type == "ellipsoid") return MakeEllipsoid(ReadVec3(implicit, "semi_axes", where, Vec3::Zero(), true));
+  if (type == "superellipsoid") {
+    return MakeSuperellipsoid(ReadVec3(implicit, "semi_axes", where, Vec3::Zero(), true),
+                              ReadScalar(implicit, "exponent", where, 2.0, 100.0, false, 0.0, true));
+  }
+  if (type == "box") return MakeBox(ReadVec3(implicit, "size", where, Vec3::Zero(), true) / 2.0);
+  if (type == "cylinder") {
+    return MakeCylinder(ReadScalar(implicit, "radius", where, 0.0, 1e6, true, 0.0, true),
+                        ReadScalar(implicit, "length", where, 0.0, 1e6, true, 0.0, true) / 2.0);
+  }
+  if (type == "prism") {
+    const double sides = ReadScalar(implicit, "sides", where, 3.0, 100000.0, false, 0.0, true);
+    if (sides != std::floor(sides)) Fail(where + " attribute 'sides' must be an integer");
+    return MakePrism(static_cast<int>(sides), ReadScalar(implicit, "radius", where, 0.0, 1e6, true, 0.0, true),
+                     ReadScalar(implicit, "length", where, 0.0, 1e6, true, 0.0, true) / 2.0);
+  }
+  if (type == "intersection") {
+    ConvexShape shape;
+    shape.type = ShapeType::kIntersection;
+    for (auto* part = implicit->FirstChildElement(); part; part = part->NextSiblingElement()) {
+      shape.inequalities.push_back(ReadPart(part, where));
+    }
+    if (shape.inequalities.empty()) Fail(where + ": an intersection needs at least one part");
+    return shape;
+  }
+  Fail(where + " attribute 'type' = '" + type +
+       "' is unknown (allowed: halfspace, sphere, ellipsoid, superellipsoid, box, cylinder, prism, intersection)");
+}
+
+const tinyxml2::XMLElement* FindLinkElement(const tinyxml2::XMLElement* robot, const std::string& name, int* count) {
+  const tinyxml2::XMLElement* found = nullptr;
+  *count = 0;
+  for (auto* e = robot->FirstChildElement("link"); e; e = e->NextSiblingElement("link")) {
+    const char* n = e->Attribute("name");
+    if (n && name == n) {
+      found = e;
+      ++*count;
+    }
+  }
+  return found;
+}
+
+FrictionParams ReadFriction(const tinyxml2::XMLElement* e, const std::string& where, const FrictionParams& base) {
+  FrictionParams f;
+  f.mu = ReadScalar(e, "mu", where, 0.0, 100.0, false, base.mu, false);
+  f.e_t = ReadScalar(e, "e_t", where, 0.0, 1e3, true, base.e_t, false);
+  f.e_o = ReadScalar(e, "e_o", where, 0.0, 1e3, true, base.e_o, false);
+  f.e_r = ReadScalar(e, "e_r", where, 0.0, 1e3, true, base.e_r, false);
+  return f;
+}
+
+void ReadBodySettings(const tinyxml2::XMLElement* e, Body* body) {
+  const std::string where = "<implicit_sim><body link='" + body->name + "'>";
+  body->v_WB0 = ReadVec3(e, "velocity", where, Vec3::Zero());
+  body->w_WB0 = ReadVec3(e, "angular_velocity", where, Vec3::Zero());
+  body->f_applied_W = ReadVec3(e, "force", where, Vec3::Zero());
+  body->tau_applied_W = ReadVec3(e, "torque", where, Vec3::Zero());
+  if (const char* locked = e->Attribute("locked")) {
+    static const std::map<std::string, int> kAxes = {{"x", 0}, {"y", 1}, {"z", 2}, {"rx", 3}, {"ry", 4}, {"rz", 5}};
+    std::istringstream in(locked);
+    std::string token;
+    while (in >> token) {
+      const auto it = kAxes.find(token);
+      if (it == kAxes.end()) Fail(where + " attribute 'locked': '" + token + "' is not one of x y z rx ry rz");
+      body->locked[it->second] = true;
+    }
+  }
+  for (int i = 0; i < 6; ++i) {
+    const double v0 = i < 3 ? body->v_WB0[i] : body->w_WB0[i - 3];
+    if (body->locked[i] && v0 != 0.0) Fail(where + ": a locked axis must start with zero velocity");
+  }
+}
+
+// Mass, inertia and the body frame (centre of mass) of a moving link.
+void ReadInertia(const urdf::Link& link, const tinyxml2::XMLElement* implicit, const Pose& X_LC, Body* body,
+                 Pose* X_LB) {
+  const std::string where = "link '" + body->name + "'";
+  if (link.inertial) {
+    const urdf::Inertial& in = *link.inertial;
+    body->mass = in.mass;
+    Mat3 I;
+    I << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
+    if (!I.allFinite() || !std::isfinite(in.mass)) Fail(where + " <inertial>: values must be finite");
+    *X_LB = ToPose(in.origin);
+    body->I_B = I;  // URDF gives the inertia in the inertial frame, which is our body frame B
+  } else {
+    const double mass = ReadScalar(implicit, "mass", where + " <implicit>", 0.0, 1e9, true, 0.0, false);
+    if (mass == 0.0) Fail(where + ": a moving link needs <inertial> or a 'mass' attribute on <implicit>");
+    double volume;
+    Mat3 I_S;
+    body->shape.UnitDensityMassProperties(&volume, &I_S);
+    body->mass = mass;
+    *X_LB = Pose::Identity();
+    X_LB->translation() = X_LC.translation();   // the centre of a primitive is its collision origin
+    body->I_B = X_LC.linear() * I_S * (mass / volume) * X_LC.linear().transpose();
+  }
+  if (!(body->mass > 0.0)) Fail(where + ": mass must be > 0 kg");
+  Eigen::SelfAdjointEigenSolver<Mat3> eig(body->I_B);
+  const Vec3 p = eig.eigenvalues();
+  if (!(p.minCoeff() > 0.0) || p[0] + p[1] < p[2] * (1.0 - 1e-9)) {
+    Fail(where + ": inertia must be positive definite and satisfy the triangle inequality");
+  }
+}
+
+}  // namespace
+
+Model LoadSceneFromString(const std::string& xml, const std::string& scene_name) {
+  tinyxml2::XMLDocument doc;
+  if (doc.Parse(xml.c_str(), xml.size()) != tinyxml2::XML_SUCCESS) {
+    Fail("scene '" + scene_name + "': not well-formed XML (" + std::string(doc.ErrorStr()) + ")");
+  }
+  const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
+  if (!robot) Fail("scene '" + scene_name + "': no <robot> element");
+  const urdf::ModelInterfaceSharedPtr urdf_model = urdf::parseURDF(xml);
+  if (!urdf_model) Fail("scene '" + scene_name + "': urdfdom could not parse the URDF");
+  if (!urdf_model->getRoot() || urdf_model->getRoot()->name != "world") {
+    Fail("scene '" + scene_name + "': the root link must be named 'world'");
+  }
+  const tinyxml2::XMLElement* sim = robot->FirstChildElement("implicit_sim");
+  Model model;
+  model.scene_name = scene_name;
+  if (sim) model.gravity_W = ReadVec3(sim, "gravity", "<implicit_sim>", model.gravity_W);
+
+  std::vector<urdf::LinkSharedPtr> links;
+  urdf_model->getLinks(links);
+  std::map<std::string, urdf::LinkSharedPtr> by_name;
+  for (const auto& l : links) by_name[l->name] = l;
+  // Keep the file's link order (getLinks is ordered by name).
+  for (auto* e = robot->FirstChildElement("link"); e; e = e->NextSiblingElement("link")) {
+    const char* name_attr = e->Attribute("name");
+    const std::string name = name_attr ? name_attr : "";
+    if (name.empty()) Fail("scene '" + scene_name + "': a <link> has no name");
+    if (name == "world") continue;
+    int count = 0;
+    FindLinkElement(robot, name, &count);
+    if (count > 1) Fail("link '" + name + "' is defined more than once");
+    const urdf::LinkSharedPtr& link = by_name.at(name);
+    const urdf::JointSharedPtr joint = link->parent_joint;
+    if (!joint || joint->parent_link_name != "world") {
+      Fail("link '" + name + "': must be joined directly to 'world' (a floating or fixed joint)");
+    }
+    if (joint->type != urdf::Joint::FLOATING && joint->type != urdf::Joint::FIXED) {
+      Fail("joint '" + joint->name + "': only 'floating' and 'fixed' joints are supported");
+    }
+    int collisions = 0;
+    const tinyxml2::XMLElement* collision_xml = e->FirstChildElement("collision");
+    for (auto* c = collision_xml; c; c = c->NextSiblingElement("collision")) ++collisions;
+    if (collisions != static_cast<int>(link->collision_array.size())) {
+      Fail("link '" + name + "': urdfdom dropped a <collision> (check its <geometry>)");
+    }
+    if (collisions > 1) Fail("link '" + name + "': one <collision> per link (a body is one convex shape)");
+    Body body;
+    body.name = name;
+    body.is_fixed = joint->type == urdf::Joint::FIXED;
+    const tinyxml2::XMLElement* implicit = collision_xml ? collision_xml->FirstChildElement("implicit") : nullptr;
+    Pose X_LC = Pose::Identity();
+    if (link->collision) {
+      X_LC = ToPose(link->collision->origin);
+      body.shape = ReadShape(name, *link->collision, implicit);
+    }
+    Pose X_LB = Pose::Identity();
+    if (!body.is_fixed) ReadInertia(*link, implicit, X_LC, &body, &X_LB);
+    body.X_BL = X_LB.inverse();
+    body.shape.X_BS = body.X_BL * X_LC;
+    const Pose X_WL0 = ToPose(joint->parent_to_joint_origin_transform);
+    if (!X_WL0.matrix().allFinite()) Fail("joint '" + joint->name + "': origin must be finite");
+    body.X_WB0 = X_WL0 * X_LB;
+    model.bodies.push_back(body);
+  }
+  if (model.bodies.empty()) Fail("scene '" + scene_name + "': no link besides 'world'");
+
+  FrictionParams default_friction;
+  std::map<std::pair<std::string, std::string>, FrictionParams> pair_friction;
+  if (sim) {
+    for (auto* e = sim->FirstChildElement(); e; e = e->NextSiblingElement()) {
+      const std::string tag = e->Name();
+      if (tag == "friction") {
+        const char* l1 = e->Attribute("link1");
+        const char* l2 = e->Attribute("link2");
+        if (!l1 && !l2) {
+          default_friction = ReadFriction(e, "<implicit_sim><friction>", FrictionParams());
+          continue;
+        }
+        if (!l1 || !l2 || model.FindBody(l1) < 0 || model.FindBody(l2) < 0) {
+          Fail("<implicit_sim><friction>: 'link1' and 'link2' must both name links of the scene");
+        }
+        pair_friction[{l1, l2}] = ReadFriction(e, std::string("<friction link1='") + l1 + "'>", default_friction);
+      } else if (tag == "body") {
+        const char* link = e->Attribute("link");
+        const int b = link ? model.FindBody(link) : -1;
+        if (b < 0) Fail("<implicit_sim><body>: attribute 'link' must name a link of the scene");
+        if (model.bodies[b].is_fixed) Fail("<implicit_sim><body link='" + std::string(link) + "'>: the link is fixed");
+        ReadBodySettings(e, &model.bodies[b]);
+      } else {
+        Fail("<implicit_sim>: unknown element <" + tag + "> (allowed: friction, body)");
+      }
+    }
+  }
+  model.Finalize([&](int i, int j) {
+    for (const auto& key : {std::make_pair(model.bodies[i].name, model.bodies[j].name),
+                            std::make_pair(model.bodies[j].name, model.bodies[i].name)}) {
+      const auto it = pair_friction.find(key);
+      if (it != pair_friction.end()) return it->second;
+    }
+    return default_friction;
+  });
+  if (model.moving_bodies.empty()) Fail("scene '" + scene_name + "': no moving body (use a 'floating' joint)");
+  return model;
+}
+
+Model LoadSceneFromFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) Fail("scene file '" + path + "' cannot be opened");
+  std::ostringstream text;
+  text << in.rdbuf();
+  std::string name = path.substr(path.find_last_of('/') + 1);
+  if (name.size() > 5 && name.substr(name.size() - 5) == ".urdf") name.resize(name.size() - 5);
+  return LoadSceneFromString(text.str(), name);
+}
+
+}  // namespace implicit_sim
