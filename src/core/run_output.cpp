@@ -21,7 +21,8 @@ void RunSummary::Add(const StepReport& report, const Data& data) {
   ++steps;
   wall_s += report.wall_time_s;
   if (!report.converged) ++nonconverged_steps;
-  if (report.cold_restart) ++cold_restarts;
+  cold_restarts += report.cold_restarts;
+  substeps += report.substeps;
   max_iterations = std::max(max_iterations, report.iterations);
   max_residual = std::max(max_residual, report.residual);
   for (const ContactResult& contact : data.contacts) max_penetration = std::max(max_penetration, -contact.gap);
@@ -38,6 +39,7 @@ std::string RunSummary::ToJson() const {
   json += "  \"max_penetration\": " + FormatNumber(max_penetration) + ",\n";
   json += "  \"nonconverged_steps\": " + std::to_string(nonconverged_steps) + ",\n";
   json += "  \"cold_restarts\": " + std::to_string(cold_restarts) + ",\n";
+  json += "  \"substeps\": " + std::to_string(substeps) + ",\n";
   json += "  \"max_iterations\": " + std::to_string(max_iterations) + ",\n";
   json += "  \"max_residual\": " + FormatNumber(max_residual) + ",\n";
   json += "  \"kinetic_energy_initial\": " + FormatNumber(kinetic_energy_initial) + ",\n";

@@ -56,7 +56,7 @@ StepProblem::StepProblem(const Model& model)
   }
 }
 
-void StepProblem::BeginStep(const Model& model, const State& start, double h, const Eigen::VectorXd& z_guess) {
+void StepProblem::BeginStep(const Model& model, const State& start, double h) {
   h_ = h;
   for (size_t b = 0; b < model.bodies.size(); ++b) {
     const Body& body = model.bodies[b];
@@ -70,8 +70,50 @@ void StepProblem::BeginStep(const Model& model, const State& start, double h, co
     s.I_W0 = s.R0 * body.I_B * s.R0.transpose();
     s.gyro_W = s.w0.cross(s.I_W0 * s.w0);
   }
+}
+
+void StepProblem::ResetTangentAxes(const Eigen::VectorXd& z) {
   for (size_t c = 0; c < blocks_.size(); ++c) {
-    tangent_axis_[c] = LeastAlignedAxis(z_guess.segment<3>(blocks_[c].offset + pi::kN));
+    tangent_axis_[c] = LeastAlignedAxis(z.segment<3>(blocks_[c].offset + pi::kN));
+  }
+}
+
+void StepProblem::UpdateTangentAxes(Eigen::VectorXd* z) {
+  for (size_t c = 0; c < blocks_.size(); ++c) {
+    const int off = blocks_[c].offset;
+    const Vec3 n = z->segment<3>(off + pi::kN);
+    if (std::abs(tangent_axis_[c].dot(n)) < 0.9 * n.norm()) continue;
+    const FrictionParams& fr = model_.pairs[c].friction;
+    Vec3 t, o;
+    Mat3 dt_dn, do_dn;
+    TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
+    // -v_tangential / sigma, independent of the basis.
+    const Vec3 slip_dir = (*z)[off + pi::kSt] / fr.e_t * t + (*z)[off + pi::kSo] / fr.e_o * o;
+    tangent_axis_[c] = LeastAlignedAxis(n);
+    TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
+    (*z)[off + pi::kSt] = fr.e_t * slip_dir.dot(t);
+    (*z)[off + pi::kSo] = fr.e_o * slip_dir.dot(o);
+  }
+}
+
+void StepProblem::SeedFriction(Eigen::VectorXd* z) const {
+  for (size_t c = 0; c < blocks_.size(); ++c) {
+    const ContactPair& pair = model_.pairs[c];
+    const FrictionParams& fr = pair.friction;
+    const PairBlock& blk = blocks_[c];
+    const int off = blk.offset;
+    const BodyStep& s1 = start_[pair.body1];
+    const BodyStep& s2 = start_[pair.body2];
+    const Vec3 n = z->segment<3>(off + pi::kN).normalized();
+    const Vec3 v_rel = (s1.v0 + s1.w0.cross(z->segment<3>(off + pi::kA1) - s1.p0)) -
+                       (s2.v0 + s2.w0.cross(z->segment<3>(off + pi::kA2) - s2.p0));
+    Vec3 t, o;
+    Mat3 dt_dn, do_dn;
+    TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
+    const Vec3 slip(fr.e_t * t.dot(v_rel), fr.e_o * o.dot(v_rel), fr.e_r * n.dot(s1.w0 - s2.w0));
+    const double sigma = slip.norm();
+    z->segment<3>(off + pi::kSt) = sigma > 1e-9 ? Vec3(-slip / sigma) : Vec3::Zero();
+    (*z)[blk.sigma()] = sigma;
   }
 }
 

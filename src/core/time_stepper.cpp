@@ -26,6 +26,8 @@ Data::Data(const Model& model)
       solver(problem.size()),
       z(Eigen::VectorXd::Zero(problem.size())),
       z_start(Eigen::VectorXd::Zero(problem.size())),
+      z_warm_failed(Eigen::VectorXd::Zero(problem.size())),
+      z_backup(kMaxSubstepDepth + 1, Eigen::VectorXd::Zero(problem.size())),
       contacts(model.pairs.size()) {}
 
 namespace {
@@ -93,6 +95,78 @@ void SeedPair(const Model& model, const State& state, int c, const StepProblem& 
   (*z)[blk.ln()] = cp.distance < 1e-6 ? 0.5 * problem.force_scale() : 0.0;
 }
 
+namespace {
+
+// One solve of the step NCP of length h from `state`: warm start if there is one, and a cold start (closest points
+// from the distance oracle) if that fails. Leaves the better solution in data->z; does not touch the state.
+NewtonResult SolveStep(const Model& model, const StepperOptions& options, double h, const State& state, Data* data,
+                       StepReport* report) {
+  StepProblem& problem = data->problem;
+  problem.BeginStep(model, state, h);
+  auto cold_guess = [&]() {
+    data->z_start.head(6 * model.num_moving()) = state.v;
+    for (int c = 0; c < static_cast<int>(model.pairs.size()); ++c) SeedPair(model, state, c, problem, &data->z_start);
+    problem.ResetTangentAxes(data->z_start);
+    problem.SeedFriction(&data->z_start);
+  };
+  auto solve_from_start = [&]() {
+    data->z = data->z_start;
+    const NewtonResult result = data->solver.Solve(&problem, options.newton, &data->z);
+    report->iterations += result.iterations;
+    return result;
+  };
+  if (!data->has_warm_start) {
+    cold_guess();
+    return solve_from_start();
+  }
+  data->z_start = data->z;  // the previous step's solution; its velocities are the state's
+  data->z_start.head(6 * model.num_moving()) = state.v;
+  problem.UpdateTangentAxes(&data->z_start);
+  const NewtonResult warm = solve_from_start();
+  if (warm.converged) return warm;
+  report->cold_restarts++;
+  data->z_warm_failed = data->z;
+  data->axes_warm_failed = problem.tangent_axes();
+  cold_guess();
+  const NewtonResult cold = solve_from_start();
+  if (cold.residual < warm.residual || !std::isfinite(warm.residual)) return cold;
+  data->z = data->z_warm_failed;  // keep the better of the two attempts
+  problem.set_tangent_axes(data->axes_warm_failed);
+  return warm;
+}
+
+// Advances the state by h; when the solve fails, by two halves instead, down to h / 2^kMaxSubstepDepth, where the
+// best finite iterate is accepted and reported as not converged. Returns false if the state could not be advanced.
+bool Advance(const Model& model, const StepperOptions& options, double h, int depth, State* state, Data* data,
+             StepReport* report) {
+  Eigen::VectorXd& backup = data->z_backup[depth];
+  backup = data->z;
+  const bool had_warm_start = data->has_warm_start;
+  const NewtonResult result = SolveStep(model, options, h, *state, data, report);
+  if (!result.converged && depth < Data::kMaxSubstepDepth) {
+    data->z = backup;
+    data->has_warm_start = had_warm_start;
+    report->substeps += 1;
+    return Advance(model, options, h / 2, depth + 1, state, data, report) &&
+           Advance(model, options, h / 2, depth + 1, state, data, report);
+  }
+  if (!std::isfinite(result.residual) || !data->z.allFinite()) {
+    data->has_warm_start = false;  // the state is left as it was; the next step starts cold
+    report->converged = false;
+    return false;
+  }
+  StepProblem& problem = data->problem;
+  report->converged = report->converged && result.converged;
+  report->residual = std::max(report->residual, result.residual);
+  report->complementarity_error = std::max(report->complementarity_error, problem.ComplementarityError(data->z));
+  for (int c = 0; c < static_cast<int>(model.pairs.size()); ++c) data->contacts[c] = problem.Contact(c, data->z);
+  WriteState(model, problem, data->z, h, state);
+  data->has_warm_start = true;
+  return true;
+}
+
+}  // namespace
+
 StepReport Step(const Model& model, const StepperOptions& options, State* state, Data* data) {
   std::string error;
   if (!options.IsValid(&error)) throw std::invalid_argument(error);
@@ -103,52 +177,12 @@ StepReport Step(const Model& model, const StepperOptions& options, State* state,
   }
   const auto wall_start = std::chrono::steady_clock::now();
   StepReport report;
-  StepProblem& problem = data->problem;
-
-  auto cold_guess = [&]() {
-    data->z_start.head(6 * model.num_moving()) = state->v;
-    for (int c = 0; c < static_cast<int>(model.pairs.size()); ++c) SeedPair(model, *state, c, problem, &data->z_start);
-  };
-  auto solve_from_start = [&](Eigen::VectorXd* z) {
-    problem.BeginStep(model, *state, options.h, data->z_start);
-    *z = data->z_start;
-    return data->solver.Solve(&problem, options.newton, z);
-  };
-
-  if (data->has_warm_start) {
-    data->z_start = data->z;  // the previous step's solution; its velocities are the state's
-    data->z_start.head(6 * model.num_moving()) = state->v;
-  } else {
-    cold_guess();
-  }
-  NewtonResult result = solve_from_start(&data->z);
-  report.iterations = result.iterations;
-  if (!result.converged && data->has_warm_start) {
-    report.cold_restart = true;
-    const Eigen::VectorXd warm_solution = data->z, warm_start = data->z_start;  // failure path only
-    const NewtonResult warm_result = result;
-    cold_guess();
-    result = solve_from_start(&data->z);
-    report.iterations += result.iterations;
-    if (!(result.residual < warm_result.residual) && std::isfinite(warm_result.residual)) {
-      data->z = warm_solution;  // keep the better of the two attempts
-      result = warm_result;
-      problem.BeginStep(model, *state, options.h, warm_start);
-    }
-  }
-  report.converged = result.converged;
-  report.residual = result.residual;
-  if (std::isfinite(result.residual) && data->z.allFinite()) {
-    report.complementarity_error = problem.ComplementarityError(data->z);
-    for (int c = 0; c < static_cast<int>(model.pairs.size()); ++c) {
-      data->contacts[c] = problem.Contact(c, data->z);
-      if (data->contacts[c].normal_force > options.contact_threshold) ++report.active_contacts;
-    }
-    WriteState(model, problem, data->z, options.h, state);
-    data->has_warm_start = true;
-    report.advanced = true;
-  } else {
-    data->has_warm_start = false;  // the state is left as it was; the next step starts cold
+  report.converged = true;
+  const double t_end = state->t + options.h;
+  report.advanced = Advance(model, options, options.h, 0, state, data, &report);
+  if (report.advanced) state->t = t_end;  // exactly t + h, whatever the sub-steps summed to
+  for (const ContactResult& contact : data->contacts) {
+    if (contact.normal_force > options.contact_threshold) ++report.active_contacts;
   }
   report.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   data->report = report;

@@ -71,9 +71,22 @@ class StepProblem {
   int size() const { return size_; }
   const std::vector<PairBlock>& blocks() const { return blocks_; }
 
-  // Stores the start-of-step quantities (poses, inertia, gyroscopic terms) and the tangent reference axis of each
-  // pair: the world axis least aligned with the normal in `z_guess` (DESIGN.md pitfall 3), fixed for the whole step.
-  void BeginStep(const Model& model, const State& start, double h, const Eigen::VectorXd& z_guess);
+  // Stores the start-of-step quantities (poses, velocities, inertia, gyroscopic terms).
+  void BeginStep(const Model& model, const State& start, double h);
+
+  // The tangent basis (t, o) of a pair is built from n and a world reference axis fixed for the whole step
+  // (DESIGN.md pitfall 3). UpdateTangentAxes keeps each pair's axis while |axis . n| < 0.9 for the normal in *z and
+  // otherwise switches to the world axis least aligned with n, re-expressing s_t, s_o of *z in the new basis so that
+  // a warm start stays a warm start. ResetTangentAxes picks the least aligned axis for every pair.
+  void UpdateTangentAxes(Eigen::VectorXd* z);
+  void ResetTangentAxes(const Eigen::VectorXd& z);
+  const std::vector<Vec3>& tangent_axes() const { return tangent_axis_; }
+  void set_tangent_axes(const std::vector<Vec3>& axes) { tangent_axis_ = axes; }
+
+  // Cold-start friction guess from the start-of-step relative velocity at the points in *z: sigma = the generalized
+  // slip speed and s = the sliding direction (sigma = 0, s = 0 is a saddle of the merit function for a sliding or
+  // separated contact).
+  void SeedFriction(Eigen::VectorXd* z) const;
 
   // The FB-reformulated residual Phi(z) and, if J is not null, its exact generalized Jacobian (n x n, dense).
   void Evaluate(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J);

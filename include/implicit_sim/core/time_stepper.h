@@ -26,11 +26,12 @@ struct StepperOptions {
 };
 
 struct StepReport {
-  bool converged = false;       // the NCP was solved to tolerance
+  bool converged = false;       // the NCP (every sub-step's, if the step was split) was solved to tolerance
   bool advanced = false;        // the state was advanced (false only when no finite solution was found)
-  bool cold_restart = false;    // the warm-started solve failed and a cold start was tried
+  int cold_restarts = 0;        // solves whose warm start failed and that were retried from a cold start
+  int substeps = 0;             // times a (sub-)step was split into two halves after its solve failed
   int iterations = 0;           // Newton iterations, all attempts
-  double residual = 0.0;        // |Phi|_2 of the accepted solution
+  double residual = 0.0;        // |Phi|_2 of the accepted solution (the largest over sub-steps)
   double complementarity_error = 0.0;
   int active_contacts = 0;      // pairs with normal force > contact_threshold
   double wall_time_s = 0.0;
@@ -38,12 +39,17 @@ struct StepReport {
 
 class Data {
  public:
+  static constexpr int kMaxSubstepDepth = 4;  // a failed step is split down to h / 16
   explicit Data(const Model& model);
   StepProblem problem;
   SemismoothNewton solver;
   Eigen::VectorXd z;            // the last solution (warm start of the next step)
   Eigen::VectorXd z_start;      // the initial guess of the current step
   bool has_warm_start = false;
+  // Workspace of the retry paths, allocated once.
+  Eigen::VectorXd z_warm_failed;
+  std::vector<Vec3> axes_warm_failed;
+  std::vector<Eigen::VectorXd> z_backup;  // per sub-step depth
   std::vector<ContactResult> contacts;  // per pair, at the end of the last step
   StepReport report;
 };
