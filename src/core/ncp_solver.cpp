@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 
 namespace implicit_sim {
 
@@ -30,8 +28,6 @@ NewtonResult SemismoothNewton::Solve(StepProblem* problem, const NewtonOptions& 
   NewtonResult result;
   problem->Evaluate(*z, &Phi_, &J_);
   double merit = 0.5 * Phi_.squaredNorm();
-  double marquardt = 0.0;
-  static const double kgrow = getenv("IMPLICIT_SIM_LM") ? atof(getenv("IMPLICIT_SIM_LM")) : 0.0;
   for (result.iterations = 0; result.iterations < options.max_iterations; ++result.iterations) {
     result.residual = std::sqrt(2.0 * merit);
     if (!std::isfinite(merit)) break;
@@ -41,7 +37,6 @@ NewtonResult SemismoothNewton::Solve(StepProblem* problem, const NewtonOptions& 
     }
     // Levenberg-Marquardt direction: (J^T J + lambda I) dz = -J^T Phi.
     normal_.noalias() = J_.transpose() * J_;
-    normal_.diagonal() += marquardt * normal_.diagonal();
     normal_.diagonal().array() += options.lm_damping * std::max(1.0, merit);
     rhs_.noalias() = -J_.transpose() * Phi_;
     ldlt_.compute(normal_);
@@ -57,12 +52,6 @@ NewtonResult SemismoothNewton::Solve(StepProblem* problem, const NewtonOptions& 
       step *= 0.5;
     }
     if (step < options.min_step) break;  // no decrease along dz: stalled (Phi_ still belongs to *z)
-    if (getenv("IMPLICIT_SIM_TRACE")) { int im; dz_.cwiseAbs().maxCoeff(&im); int ip; Phi_.cwiseAbs().maxCoeff(&ip); fprintf(stderr, "it %d merit %.3e step %.3e |dz| %.3e argmax %d  phimax %d %.3e z %.4e\n", result.iterations, merit, step, dz_.norm(), im, ip, Phi_[ip], (*z)[im]); }
-    if (kgrow > 0) {
-      if (step < 0.1) marquardt = std::max(1e-8, marquardt * kgrow);
-      else if (step == 1.0) marquardt *= 0.1;
-      if (marquardt < 1e-12) marquardt = 0.0;
-    }
     z->swap(z_trial_);
     problem->Evaluate(*z, &Phi_, &J_);
     merit = 0.5 * Phi_.squaredNorm();

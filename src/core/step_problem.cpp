@@ -13,8 +13,10 @@ namespace {
 struct FB {
   double value, da, db;
 };
-FB FischerBurmeister(double a, double b) {
-  const double r = std::hypot(a, b);
+// With smoothing mu > 0: a + b - sqrt(a^2 + b^2 + 2 mu^2), smooth everywhere, whose root set a, b > 0, a b = mu^2
+// tends to the complementarity set as mu -> 0 (smoothing continuation, Chen-Harker-Kanzow-Smale).
+FB FischerBurmeister(double a, double b, double mu) {
+  const double r = std::sqrt(a * a + b * b + 2.0 * mu * mu);
   if (r < 1e-14) return {a + b - r, 1.0 - 1.0 / std::sqrt(2.0), 1.0 - 1.0 / std::sqrt(2.0)};
   return {a + b - r, 1.0 - a / r, 1.0 - b / r};
 }
@@ -266,7 +268,7 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi,
       Phi->segment<3>(side.rows) -= mult * ev.g;
       add(side.rows, side.mult_col + k, -ev.g);
       add(side.rows, side.a_col, -mult * ev.H);
-      const FB fb = FischerBurmeister(mult, -ev.f);
+      const FB fb = FischerBurmeister(mult, -ev.f, smoothing_);
       const int fb_row = side.mult_col + k;
       (*Phi)[fb_row] = fb.value;
       add1(fb_row, side.mult_col + k, fb.da);
@@ -327,13 +329,13 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi,
 
   // Non-penetration (paper eq. 11 with the signed distance d as gap): ln / Fs _|_ d.
   const double Fs = force_scale_;
-  const FB fb_n = FischerBurmeister(ln / Fs, d);
+  const FB fb_n = FischerBurmeister(ln / Fs, d, smoothing_);
   (*Phi)[blk.ln()] = fb_n.value;
   add1(blk.ln(), blk.ln(), fb_n.da / Fs);
   add1(blk.ln(), off + pi::kD, fb_n.db);
 
   // Friction ellipsoid (paper eq. 5 divided by (mu ln)^2): sigma _|_ 1 - s_t^2 - s_o^2 - s_r^2.
-  const FB fb_s = FischerBurmeister(sigma, 1.0 - st * st - so * so - sr * sr);
+  const FB fb_s = FischerBurmeister(sigma, 1.0 - st * st - so * so - sr * sr, smoothing_);
   (*Phi)[blk.sigma()] = fb_s.value;
   add1(blk.sigma(), blk.sigma(), fb_s.da);
   add1(blk.sigma(), off + pi::kSt, -2.0 * fb_s.db * st);

@@ -129,10 +129,31 @@ NewtonResult SolveStep(const Model& model, const StepperOptions& options, double
   data->axes_warm_failed = problem.tangent_axes();
   cold_guess();
   const NewtonResult cold = solve_from_start();
-  if (cold.residual < warm.residual || !std::isfinite(warm.residual)) return cold;
-  data->z = data->z_warm_failed;  // keep the better of the two attempts
-  problem.set_tangent_axes(data->axes_warm_failed);
-  return warm;
+  if (cold.converged) return cold;
+  if (!(cold.residual < warm.residual) && std::isfinite(warm.residual)) {
+    data->z = data->z_warm_failed;  // continue from the better of the two attempts
+    problem.set_tangent_axes(data->axes_warm_failed);
+  }
+  // Smoothing continuation: solve with FB smoothed by mu = 1e-2, 1e-3, ... and then exactly, each from the last.
+  report->smoothed_solves++;
+  data->z_start = data->z;
+  NewtonResult result;
+  for (double mu = 1e-2; mu > 1e-9; mu *= 0.1) {
+    problem.set_smoothing(mu);
+    result = data->solver.Solve(&problem, options.newton, &data->z);
+    report->iterations += result.iterations;
+    if (!std::isfinite(result.residual)) break;
+  }
+  problem.set_smoothing(0.0);
+  if (data->z.allFinite()) {
+    result = data->solver.Solve(&problem, options.newton, &data->z);
+    report->iterations += result.iterations;
+  }
+  if (result.converged) return result;
+  const double best = std::min(warm.residual, cold.residual);
+  if (result.residual < best || !std::isfinite(best)) return result;
+  data->z = data->z_start;  // the continuation did not help
+  return best == cold.residual ? cold : warm;
 }
 
 // Advances the state by h; when the solve fails, by two halves instead, down to h / 2^kMaxSubstepDepth, where the

@@ -23,6 +23,7 @@ struct RunSummary {
   double max_penetration = 0.0;        // max over steps and pairs of max(0, -gap) (m)
   int nonconverged_steps = 0;
   int cold_restarts = 0;
+  int smoothed_solves = 0;             // solves rescued by smoothing continuation
   int substeps = 0;                    // step splits after failed solves
   int max_iterations = 0;
   double max_residual = 0.0;

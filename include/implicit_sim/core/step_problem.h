@@ -100,6 +100,8 @@ class StepProblem {
   Pose EndPose(int body, const Eigen::VectorXd& z) const;
 
   double force_scale() const { return force_scale_; }
+  // Smoothing mu >= 0 of every Fischer-Burmeister function (0: the exact problem). See FischerBurmeister.
+  void set_smoothing(double mu) { smoothing_ = mu; }
 
  private:
   struct BodyStep {   // per body, for the current step
@@ -142,6 +144,7 @@ class StepProblem {
   int size_ = 0;
   double h_ = 0.0;
   double force_scale_ = 1.0;
+  double smoothing_ = 0.0;
 };
 
 }  // namespace implicit_sim

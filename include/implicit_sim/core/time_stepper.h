@@ -29,6 +29,7 @@ struct StepReport {
   bool converged = false;       // the NCP (every sub-step's, if the step was split) was solved to tolerance
   bool advanced = false;        // the state was advanced (false only when no finite solution was found)
   int cold_restarts = 0;        // solves whose warm start failed and that were retried from a cold start
+  int smoothed_solves = 0;      // solves that went on to a smoothing continuation after the cold start failed
   int substeps = 0;             // times a (sub-)step was split into two halves after its solve failed
   int iterations = 0;           // Newton iterations, all attempts
   double residual = 0.0;        // |Phi|_2 of the accepted solution (the largest over sub-steps)
