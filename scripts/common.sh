@@ -16,13 +16,13 @@ install_packages() {
   for p in $APT_PACKAGES; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
   done
-  if [ -n "$missing" ]; then
-    echo "[implicit_sim] installing:$missing"
+  if [ -n "$missing" ] || [ -n "${IMPLICIT_SIM_FORCE_APT:-}" ]; then
+    echo "[implicit_sim] installing Debian packages (missing:${missing:- none})"
     local sudo=""
     [ "$(id -u)" = 0 ] || sudo=sudo
     export DEBIAN_FRONTEND=noninteractive
     $sudo apt-get update
-    $sudo apt-get -o DPkg::Lock::Timeout=900 install -y --no-install-recommends $missing
+    $sudo apt-get -o DPkg::Lock::Timeout=900 install -y --no-install-recommends $APT_PACKAGES
   fi
 }
 
