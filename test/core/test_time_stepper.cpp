@@ -1,0 +1,160 @@
+// The stepper on closed-form situations and degenerate cases: free fall with a separated contact, a box resting
+// on a face, a stack of two moving spheres, a sphere dropped on the ground; option and state validation;
+// determinism.
+#include "implicit_sim/core/time_stepper.h"
+
+#include <cmath>
+#include <cstring>
+
+#include <gtest/gtest.h>
+
+#include "scenario_runner.h"
+#include "test_models.h"
+
+namespace implicit_sim {
+namespace {
+
+using test_models::FixedBody;
+using test_models::MakePose;
+using test_models::MovingBody;
+
+Model SphereAboveGround(double height) {
+  Model m;
+  m.bodies.push_back(FixedBody("ground", MakeHalfSpace()));
+  m.bodies.push_back(MovingBody("ball", MakeSphere(0.1), 0.5, MakePose(Vec3(0, 0, height))));
+  return test_models::Finish(m);
+}
+
+TEST(TimeStepper, SeparatedContactIsExactFreeFall) {
+  // Normal force 0 leaves the paper's friction rows degenerate (DESIGN.md pitfall 2); the step must still converge
+  // and reproduce implicit Euler free fall exactly: v_k = -g h k, z_k = z0 - g h^2 k (k + 1) / 2.
+  const Model model = SphereAboveGround(2.0);
+  const double h = 0.01, g = 9.81;
+  int k = 0;
+  testing_support::RunScene(model, h, 0.4, [&](const Model&, const State& s, const Data& d, const StepReport& r) {
+    ++k;
+    EXPECT_TRUE(r.converged) << "step " << k;
+    EXPECT_NEAR(s.v[2], -g * h * k, 1e-11);
+    EXPECT_NEAR(s.q[2], 2.0 - g * h * h * k * (k + 1) / 2.0, 1e-11);
+    EXPECT_EQ(d.contacts[0].normal_force, d.contacts[0].normal_force);  // not NaN
+    EXPECT_NEAR(d.contacts[0].normal_force, 0.0, 1e-9);
+    EXPECT_NEAR(d.contacts[0].gap, s.q[2] - 0.1, 1e-9);  // closed-form distance to the ground
+  });
+  EXPECT_EQ(k, 40);
+}
+
+TEST(TimeStepper, DroppedSphereLandsWithoutPenetratingAndComesToRest) {
+  const Model model = SphereAboveGround(0.3);
+  double lowest = 1.0;
+  const auto stats = testing_support::RunScene(model, 0.01, 1.0,
+                                               [&](const Model&, const State& s, const Data&, const StepReport&) {
+                                                 lowest = std::min(lowest, s.q[2] - 0.1);
+                                               });
+  EXPECT_EQ(stats.nonconverged, 0);
+  EXPECT_GE(lowest, -1e-8);
+  EXPECT_LT(stats.ke_final, 1e-12);  // the implicit step is a perfectly inelastic impact
+}
+
+TEST(TimeStepper, BoxRestingOnAFaceHoldsItsWeightWithoutDrift) {
+  // Flat face on a plane: the closest point is not unique along the face (DESIGN.md pitfall 6); Newton-Euler picks
+  // the equivalent contact point. The box must stay put and carry its weight.
+  Model m;
+  m.bodies.push_back(FixedBody("ground", MakeHalfSpace()));
+  m.bodies.push_back(MovingBody("box", MakeBox(Vec3(0.2, 0.1, 0.05)), 2.0,
+                                MakePose(Vec3(0.3, -0.1, 0.05), test_models::Rot(0.4, Vec3(0, 0, 1)))));
+  const Model model = test_models::Finish(m);
+  const Vec3 p0 = model.bodies[1].X_WB0.translation();
+  double max_drift = 0.0, max_force_error = 0.0, lowest = 1.0;
+  const auto stats = testing_support::RunScene(model, 0.01, 2.0,
+                                               [&](const Model& mm, const State& s, const Data& d, const StepReport&) {
+    max_drift = std::max(max_drift, (s.q.head<3>() - p0).norm());
+    max_force_error = std::max(max_force_error, std::abs(d.contacts[0].normal_force - 2.0 * 9.81));
+    const Pose X = s.X_WB(mm, 1);
+    for (int i = 0; i < 8; ++i) {  // the box's corners, closed form
+      const Vec3 corner(i & 1 ? 0.2 : -0.2, i & 2 ? 0.1 : -0.1, i & 4 ? 0.05 : -0.05);
+      lowest = std::min(lowest, (X * corner).z());
+    }
+  });
+  EXPECT_EQ(stats.nonconverged, 0);
+  EXPECT_LT(max_drift, 1e-9);
+  EXPECT_LT(max_force_error, 1e-6);
+  EXPECT_GE(lowest, -1e-8);
+}
+
+TEST(TimeStepper, StackOfTwoMovingSpheresCarriesBothWeights) {
+  Model m;
+  m.bodies.push_back(FixedBody("ground", MakeHalfSpace()));
+  m.bodies.push_back(MovingBody("lower", MakeSphere(0.1), 1.0, MakePose(Vec3(0, 0, 0.1))));
+  m.bodies.push_back(MovingBody("upper", MakeSphere(0.05), 0.5, MakePose(Vec3(0, 0, 0.25))));
+  const Model model = test_models::Finish(m);
+  ASSERT_EQ(model.pairs.size(), 3u);  // lower-ground, lower-upper (both moving), upper-ground
+  std::vector<double> forces(3);
+  const auto stats = testing_support::RunScene(model, 0.01, 1.0,
+                                               [&](const Model&, const State&, const Data& d, const StepReport&) {
+    for (int c = 0; c < 3; ++c) forces[c] = d.contacts[c].normal_force;
+  });
+  EXPECT_EQ(stats.nonconverged, 0);
+  for (int c = 0; c < 3; ++c) {
+    const ContactPair& p = model.pairs[c];
+    const std::string name = p.name;
+    if (name == "lower-ground") EXPECT_NEAR(forces[c], 1.5 * 9.81, 1e-6);
+    else if (name == "lower-upper") EXPECT_NEAR(forces[c], 0.5 * 9.81, 1e-6);
+    else EXPECT_NEAR(forces[c], 0.0, 1e-9) << name;
+  }
+}
+
+TEST(TimeStepper, InvalidOptionsAndStateThrowAndChangeNothing) {
+  const Model model = SphereAboveGround(1.0);
+  Data data(model);
+  State state = State::Initial(model);
+  const State before = state;
+  StepperOptions options;
+  options.h = -0.01;
+  EXPECT_THROW(Step(model, options, &state, &data), std::invalid_argument);
+  options.h = 0.01;
+  options.newton.tolerance = 0.0;
+  EXPECT_THROW(Step(model, options, &state, &data), std::invalid_argument);
+  EXPECT_EQ(state.q, before.q);
+  EXPECT_EQ(state.v, before.v);
+  EXPECT_EQ(state.t, before.t);
+  State wrong;
+  wrong.q = Eigen::VectorXd::Zero(3);
+  wrong.v = Eigen::VectorXd::Zero(6);
+  EXPECT_THROW(Step(model, StepperOptions(), &wrong, &data), std::invalid_argument);
+  std::string error;
+  options.newton.tolerance = 1e-10;
+  options.newton.max_iterations = 0;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("max_iterations"), std::string::npos);
+}
+
+TEST(TimeStepper, TwoRunsAreBitIdentical) {
+  const Model model = LoadSceneFromFile(testing_support::ScenePath("p3_sphere_on_two_spheres.urdf"));
+  auto run = [&]() {
+    Data data(model);
+    State state = State::Initial(model);
+    StepperOptions options;
+    for (int i = 0; i < 150; ++i) Step(model, options, &state, &data);
+    return state;
+  };
+  const State a = run(), b = run();
+  EXPECT_EQ(0, std::memcmp(a.q.data(), b.q.data(), sizeof(double) * a.q.size()));
+  EXPECT_EQ(0, std::memcmp(a.v.data(), b.v.data(), sizeof(double) * a.v.size()));
+}
+
+TEST(TimeStepper, ReportCountsIterationsAndActiveContacts) {
+  const Model model = LoadSceneFromFile(testing_support::ScenePath("p3_sphere_on_two_spheres.urdf"));
+  Data data(model);
+  State state = State::Initial(model);
+  const StepReport report = Step(model, StepperOptions(), &state, &data);
+  EXPECT_TRUE(report.converged);
+  EXPECT_TRUE(report.advanced);
+  EXPECT_GT(report.iterations, 0);
+  EXPECT_LE(report.residual, 1e-10);
+  EXPECT_LE(report.complementarity_error, 1e-9);
+  EXPECT_EQ(report.active_contacts, 2);
+  EXPECT_NEAR(state.t, 0.01, 1e-15);
+}
+
+}  // namespace
+}  // namespace implicit_sim
