@@ -243,6 +243,16 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name)
   }
   const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
   if (!robot) Fail("scene '" + scene_name + "': no <robot> element");
+  // Joint types first: urdfdom refuses a revolute joint without <limit> with a message that names nothing.
+  for (auto* j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
+    const char* name = j->Attribute("name");
+    const char* type = j->Attribute("type");
+    const std::string type_text = type ? type : "";
+    if (type_text != "floating" && type_text != "fixed") {
+      Fail("joint '" + std::string(name ? name : "") + "': type '" + type_text +
+           "' is not supported (allowed: floating, fixed)");
+    }
+  }
   const urdf::ModelInterfaceSharedPtr urdf_model = urdf::parseURDF(xml);
   if (!urdf_model) Fail("scene '" + scene_name + "': urdfdom could not parse the URDF");
   if (!urdf_model->getRoot() || urdf_model->getRoot()->name != "world") {
@@ -270,9 +280,6 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name)
     const urdf::JointSharedPtr joint = link->parent_joint;
     if (!joint || joint->parent_link_name != "world") {
       Fail("link '" + name + "': must be joined directly to 'world' (a floating or fixed joint)");
-    }
-    if (joint->type != urdf::Joint::FLOATING && joint->type != urdf::Joint::FIXED) {
-      Fail("joint '" + joint->name + "': only 'floating' and 'fixed' joints are supported");
     }
     int collisions = 0;
     const tinyxml2::XMLElement* collision_xml = e->FirstChildElement("collision");

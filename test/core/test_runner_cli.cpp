@@ -1,0 +1,74 @@
+// The headless runner's command-line contract: outputs and their columns, and refusal of bad arguments with a
+// non-zero exit and nothing written.
+#include <sys/stat.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "scenario_runner.h"
+
+namespace implicit_sim {
+namespace {
+
+int RunRunner(const std::string& args) {
+  const std::string command = std::string(IMPLICIT_SIM_RUNNER) + " " + args + " > /dev/null 2>&1";
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+bool Exists(const std::string& path) {
+  struct stat st;
+  return ::stat(path.c_str(), &st) == 0;
+}
+
+std::string TempDir(const std::string& name) {
+  const std::string dir = ::testing::TempDir() + "implicit_sim_cli_" + name;
+  std::system(("rm -rf '" + dir + "'").c_str());
+  return dir;
+}
+
+TEST(RunnerCli, WritesTrajectoryAndSummaryWithTheDocumentedColumns) {
+  const std::string out = TempDir("ok");
+  ASSERT_EQ(RunRunner("--scene " + testing_support::ScenePath("p3_sphere_on_two_spheres.urdf") +
+                      " --duration 0.05 --dt 0.01 --out " + out),
+            0);
+  std::ifstream csv(out + "/trajectory.csv");
+  std::string header, line;
+  std::getline(csv, header);
+  EXPECT_EQ(header,
+            "t,ball.x,ball.y,ball.z,ball.qw,ball.qx,ball.qy,ball.qz,ball.vx,ball.vy,ball.vz,ball.wx,ball.wy,ball.wz,"
+            "ball-sphere_a.gap,ball-sphere_a.fn,ball-sphere_a.ft,ball-sphere_a.mr,ball-sphere_a.slip,"
+            "ball-sphere_b.gap,ball-sphere_b.fn,ball-sphere_b.ft,ball-sphere_b.mr,ball-sphere_b.slip,"
+            "step.iterations,step.residual,step.converged");
+  int rows = 0;
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_EQ(rows, 6);  // t = 0 and 5 steps
+  std::ifstream summary_file(out + "/summary.json");
+  std::stringstream summary;
+  summary << summary_file.rdbuf();
+  for (const char* key : {"\"scene\": \"p3_sphere_on_two_spheres\"", "\"h\": 0.01", "\"steps\": 5", "\"wall_s\"",
+                          "\"us_per_step\"", "\"max_penetration\"", "\"nonconverged_steps\": 0"}) {
+    EXPECT_NE(summary.str().find(key), std::string::npos) << key << " missing in\n" << summary.str();
+  }
+}
+
+TEST(RunnerCli, RefusesBadArgumentsAndWritesNothing) {
+  const std::string scene = testing_support::ScenePath("p2_sphere_spinning.urdf");
+  const std::string out = TempDir("bad");
+  EXPECT_EQ(RunRunner("--scene " + scene + " --duration 1 --out " + out + " --bogus 1"), 2);
+  EXPECT_EQ(RunRunner("--scene /nonexistent.urdf --duration 1 --out " + out), 2);
+  EXPECT_EQ(RunRunner("--scene " + scene + " --duration -1 --out " + out), 2);
+  EXPECT_EQ(RunRunner("--scene " + scene + " --duration 1 --dt 2 --out " + out), 2);
+  EXPECT_EQ(RunRunner("--scene " + scene + " --duration 1 --dt abc --out " + out), 2);
+  EXPECT_EQ(RunRunner("--scene " + scene + " --duration 1"), 2);
+  EXPECT_EQ(RunRunner("--scene " + scene + " --duration 1 --out " + out + " --max-iterations 2.5"), 2);
+  EXPECT_FALSE(Exists(out));
+}
+
+}  // namespace
+}  // namespace implicit_sim
