@@ -141,6 +141,8 @@ TEST(P3SphereOnTwoSpheres, EventsVelocityAndNonPenetrationMatchTheReference) {
   int toggles[2] = {0, 0};
   bool active[2] = {true, true};  // both touch at t = 0
   double separation[2] = {-1.0, -1.0}, slide_b = -1.0, max_bound = 0.0, max_closed_form = 0.0;
+  double max_oracle_gap_error = 0.0;
+  int oracle_checks = 0;
   Vec3 v_at_3_5 = Vec3::Constant(NAN);
   const RunStats stats = RunScene(model, 0.01, 5.0, [&](const Model& m, const State& s, const Data& d, const StepReport&) {
     for (int c : {pair_a, pair_b}) {
@@ -154,6 +156,14 @@ TEST(P3SphereOnTwoSpheres, EventsVelocityAndNonPenetrationMatchTheReference) {
       max_bound = std::max(max_bound, PenetrationBound(m.bodies[ball].shape, s.X_WB(m, ball), m.bodies[other].shape,
                                                        s.X_WB(m, other), contact.p_WA2, contact.n_W));
       const double centre_distance = (s.X_WB(m, ball).translation() - s.X_WB(m, other).translation()).norm();
+      if (contact.gap > 1e-3 && std::lround(s.t * 100) % 10 == 0) {  // separated: the oracle's closest points
+        const ClosestPointsResult cp =
+            ComputeClosestPoints(m.bodies[ball].shape, s.X_WB(m, ball), m.bodies[other].shape, s.X_WB(m, other));
+        ASSERT_TRUE(cp.solved);
+        max_oracle_gap_error = std::max({max_oracle_gap_error, std::abs(cp.distance - contact.gap),
+                                         (cp.p_W1 - contact.p_WA1).norm(), (cp.p_W2 - contact.p_WA2).norm()});
+        ++oracle_checks;
+      }
       max_closed_form = std::max(max_closed_form, m.bodies[other].shape.size[0] + 1.0 - centre_distance);
     }
     if (slide_b < 0.0 && active[pair_b] && d.contacts[pair_b].slip_speed > 1e-4) slide_b = s.t;
@@ -169,6 +179,8 @@ TEST(P3SphereOnTwoSpheres, EventsVelocityAndNonPenetrationMatchTheReference) {
   EXPECT_LE((v_at_3_5 - v_ref).norm(), 0.03 * v_ref.norm()) << "v(3.5 s) = " << v_at_3_5.transpose();
   EXPECT_LE(max_bound, 1e-8);
   EXPECT_LE(max_closed_form, 1e-8);
+  EXPECT_GT(oracle_checks, 20);
+  EXPECT_LE(max_oracle_gap_error, 1e-6);
   EXPECT_LE(stats.max_solver_penetration, 1e-8);
 }
 

@@ -2,6 +2,7 @@
 // on a face, a stack of two moving spheres, a sphere dropped on the ground; option and state validation;
 // determinism.
 #include "implicit_sim/core/time_stepper.h"
+#include "implicit_sim/core/distance_oracle.h"
 
 #include <cmath>
 #include <cstring>
@@ -154,6 +155,40 @@ TEST(TimeStepper, ReportCountsIterationsAndActiveContacts) {
   EXPECT_LE(report.complementarity_error, 1e-9);
   EXPECT_EQ(report.active_contacts, 2);
   EXPECT_NEAR(state.t, 0.01, 1e-15);
+}
+
+}  // namespace
+}  // namespace implicit_sim
+
+namespace implicit_sim {
+namespace {
+
+TEST(TimeStepper, ClosestPointsOfTwoEllipsoidsMatchTheDistanceOracle) {
+  // No closed-form distance exists between two ellipsoids: the oracle (paper eq. 7 by Ipopt) is the reference.
+  Model m;
+  m.gravity_W = Vec3(0.0, 0.0, -2.0);
+  m.bodies.push_back(FixedBody("base", MakeEllipsoid(Vec3(0.5, 0.3, 0.2)),
+                               MakePose(Vec3::Zero(), test_models::Rot(0.3, Vec3(1, 1, 0)))));
+  m.bodies.push_back(MovingBody("egg", MakeEllipsoid(Vec3(0.2, 0.15, 0.1)), 1.0,
+                                MakePose(Vec3(0.1, 0.05, 0.6), test_models::Rot(0.8, Vec3(0, 1, 2)))));
+  m.bodies.back().w_WB0 = Vec3(0.5, -1.0, 2.0);
+  const Model model = test_models::Finish(m);
+  double worst = 0.0, min_gap = 1.0;
+  int checks = 0;
+  testing_support::RunScene(model, 0.01, 0.6, [&](const Model& mm, const State& s, const Data& d, const StepReport& r) {
+    ASSERT_TRUE(r.converged);
+    const ContactResult& c = d.contacts[0];
+    min_gap = std::min(min_gap, c.gap);
+    if (c.gap < 1e-3) return;
+    const ClosestPointsResult cp = ComputeClosestPoints(mm.bodies[1].shape, s.X_WB(mm, 1), mm.bodies[0].shape,
+                                                        s.X_WB(mm, 0));
+    ASSERT_TRUE(cp.solved);
+    worst = std::max({worst, std::abs(cp.distance - c.gap), (cp.p_W1 - c.p_WA1).norm(), (cp.p_W2 - c.p_WA2).norm()});
+    ++checks;
+  });
+  EXPECT_GT(checks, 20);
+  EXPECT_LT(worst, 1e-6);
+  EXPECT_LT(min_gap, 0.05);  // it did fall close to the base
 }
 
 }  // namespace

@@ -1,0 +1,51 @@
+// "No allocation inside the step once warm": counts heap allocations (a replaced global operator new) while a warm
+// stepper runs P3, including the contact transitions and separations.
+#include <atomic>
+#include <cstdlib>
+#include <new>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "scenario_runner.h"
+
+namespace {
+std::atomic<long> g_allocations{0};
+}  // namespace
+
+void* operator new(std::size_t size) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+namespace implicit_sim {
+namespace {
+
+TEST(Allocation, TheCounterSeesAllocations) {
+  const long before = g_allocations.load();
+  std::string text(100, 'x');  // longer than the small-string buffer
+  EXPECT_GE(g_allocations.load() - before, 1);
+  EXPECT_EQ(text.size(), 100u);
+}
+
+TEST(Allocation, AWarmStepAllocatesNothing) {
+  for (const char* scene : {"p3_sphere_on_two_spheres.urdf", "p1_ngon20.urdf", "p2_sphere_spinning.urdf"}) {
+    SCOPED_TRACE(scene);
+    const Model model = LoadSceneFromFile(testing_support::ScenePath(scene));
+    Data data(model);
+    State state = State::Initial(model);
+    const StepperOptions options;
+    Step(model, options, &state, &data);  // the first step starts cold (distance oracle)
+    const long before = g_allocations.load();
+    int cold = 0;
+    for (int i = 0; i < 400; ++i) cold += Step(model, options, &state, &data).cold_restarts;
+    ASSERT_EQ(cold, 0) << "a cold restart (which calls Ipopt) would allocate";
+    EXPECT_EQ(g_allocations.load() - before, 0);
+  }
+}
+
+}  // namespace
+}  // namespace implicit_sim
