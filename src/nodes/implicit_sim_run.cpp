@@ -2,10 +2,10 @@
 // Writes DIR/trajectory.csv and DIR/summary.json (see README.md). No roscore needed.
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <string>
-#include <sys/stat.h>
 
 #include "implicit_sim/core/run_output.h"
 #include "implicit_sim/core/state.h"
@@ -79,12 +79,17 @@ int main(int argc, char** argv) {
     std::string error;
     if (!options.IsValid(&error)) throw std::invalid_argument(error);
     model = LoadSceneFromFile(args.scene);
+    std::error_code ec;
+    std::filesystem::create_directories(args.out, ec);
+    if (ec || !std::filesystem::is_directory(args.out)) {
+      throw std::invalid_argument("--out '" + args.out + "' is not a directory that can be created (" + ec.message() +
+                                  ")");
+    }
   } catch (const std::exception& e) {
     std::cerr << "implicit_sim_run: " << e.what() << "\n";
     return 2;
   }
   try {
-    ::mkdir(args.out.c_str(), 0755);
     TrajectoryWriter writer(args.out + "/trajectory.csv", model);
     Data data(model);
     State state = State::Initial(model);
