@@ -18,7 +18,7 @@ double Model::ForceScale() const {
   for (int b : moving_bodies) {
     const Body& body = bodies[b];
     scale = std::max(scale, (body.mass * gravity_W + body.f_applied_W).norm());
-    scale = std::max(scale, body.mass * gravity_W.norm());
+    scale = std::max(scale, body.mass * std::max(gravity_W.norm(), 1.0));  // at least the weight in 1 m/s^2
   }
   return scale;
 }

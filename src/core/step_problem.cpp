@@ -1,5 +1,6 @@
 #include "implicit_sim/core/step_problem.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "implicit_sim/core/rotation.h"
@@ -53,13 +54,24 @@ StepProblem::StepProblem(const Model& model)
     size_ += block.size();
   }
   tangent_axis_.assign(model.pairs.size(), Vec3::UnitX());
+  external_wrench_W_ = Eigen::VectorXd::Zero(6 * model.num_moving());
   for (size_t b = 0; b < model.bodies.size(); ++b) {
     end_[b].col = model.velocity_slot[b] < 0 ? -1 : 6 * model.velocity_slot[b];
   }
 }
 
-void StepProblem::BeginStep(const Model& model, const State& start, double h) {
+void StepProblem::BeginStep(const Model& model, const State& start, double h,
+                            const Eigen::VectorXd* external_wrench_W) {
   h_ = h;
+  force_scale_ = model.ForceScale();
+  if (external_wrench_W) {
+    external_wrench_W_ = *external_wrench_W;
+    for (int k = 0; k < model.num_moving(); ++k) {
+      force_scale_ = std::max(force_scale_, external_wrench_W_.segment<3>(6 * k).norm());
+    }
+  } else {
+    external_wrench_W_.setZero();
+  }
   for (size_t b = 0; b < model.bodies.size(); ++b) {
     const Body& body = model.bodies[b];
     const Pose X_WB = start.X_WB(model, static_cast<int>(b));
@@ -115,7 +127,9 @@ void StepProblem::SeedFriction(Eigen::VectorXd* z) const {
     const Vec3 slip(fr.e_t * t.dot(v_rel), fr.e_o * o.dot(v_rel), fr.e_r * n.dot(s1.w0 - s2.w0));
     const double sigma = slip.norm();
     z->segment<3>(off + pi::kSt) = sigma > 1e-9 ? Vec3(-slip / sigma) : Vec3::Zero();
-    (*z)[blk.sigma()] = sigma;
+    // No slip yet: sigma = 0, s = 0 would be a saddle of the merit function, so start from sigma > 0 (the rows
+    // e (t.v_rel) + s sigma then determine s, and sigma moves to the slip speed or to 0 when the contact sticks).
+    (*z)[blk.sigma()] = sigma > 1e-9 ? sigma : 1e-3;
   }
 }
 
@@ -187,9 +201,10 @@ void StepProblem::AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Ei
     const Body& body = model_.bodies[b];
     const BodyStep& s = start_[b];
     const int row = 6 * k;
-    const Vec3 f_ext = body.mass * model_.gravity_W + body.f_applied_W;
+    const Vec3 f_ext = body.mass * model_.gravity_W + body.f_applied_W + external_wrench_W_.segment<3>(row);
+    const Vec3 tau_ext = body.tau_applied_W + external_wrench_W_.segment<3>(row + 3);
     Phi->segment<3>(row) = (body.mass * (z.segment<3>(row) - s.v0) / h_ - f_ext) / Fs;
-    Phi->segment<3>(row + 3) = (s.I_W0 * (z.segment<3>(row + 3) - s.w0) / h_ + s.gyro_W - body.tau_applied_W) / Fs;
+    Phi->segment<3>(row + 3) = (s.I_W0 * (z.segment<3>(row + 3) - s.w0) / h_ + s.gyro_W - tau_ext) / Fs;
     if (J) {
       J->block<3, 3>(row, row) += Mat3::Identity() * body.mass / (h_ * Fs);
       J->block<3, 3>(row + 3, row + 3) += s.I_W0 / (h_ * Fs);

@@ -99,10 +99,10 @@ namespace {
 
 // One solve of the step NCP of length h from `state`: warm start if there is one, and a cold start (closest points
 // from the distance oracle) if that fails. Leaves the better solution in data->z; does not touch the state.
-NewtonResult SolveStep(const Model& model, const StepperOptions& options, double h, const State& state, Data* data,
-                       StepReport* report) {
+NewtonResult SolveStep(const Model& model, const StepperOptions& options, double h, const State& state,
+                       const Eigen::VectorXd* wrench, Data* data, StepReport* report) {
   StepProblem& problem = data->problem;
-  problem.BeginStep(model, state, h);
+  problem.BeginStep(model, state, h, wrench);
   auto cold_guess = [&]() {
     data->z_start.head(6 * model.num_moving()) = state.v;
     for (int c = 0; c < static_cast<int>(model.pairs.size()); ++c) SeedPair(model, state, c, problem, &data->z_start);
@@ -158,18 +158,18 @@ NewtonResult SolveStep(const Model& model, const StepperOptions& options, double
 
 // Advances the state by h; when the solve fails, by two halves instead, down to h / 2^kMaxSubstepDepth, where the
 // best finite iterate is accepted and reported as not converged. Returns false if the state could not be advanced.
-bool Advance(const Model& model, const StepperOptions& options, double h, int depth, State* state, Data* data,
-             StepReport* report) {
+bool Advance(const Model& model, const StepperOptions& options, double h, int depth, const Eigen::VectorXd* wrench,
+             State* state, Data* data, StepReport* report) {
   Eigen::VectorXd& backup = data->z_backup[depth];
   backup = data->z;
   const bool had_warm_start = data->has_warm_start;
-  const NewtonResult result = SolveStep(model, options, h, *state, data, report);
+  const NewtonResult result = SolveStep(model, options, h, *state, wrench, data, report);
   if (!result.converged && depth < Data::kMaxSubstepDepth) {
     data->z = backup;
     data->has_warm_start = had_warm_start;
     report->substeps += 1;
-    return Advance(model, options, h / 2, depth + 1, state, data, report) &&
-           Advance(model, options, h / 2, depth + 1, state, data, report);
+    return Advance(model, options, h / 2, depth + 1, wrench, state, data, report) &&
+           Advance(model, options, h / 2, depth + 1, wrench, state, data, report);
   }
   if (!std::isfinite(result.residual) || !data->z.allFinite()) {
     data->has_warm_start = false;  // the state is left as it was; the next step starts cold
@@ -188,7 +188,8 @@ bool Advance(const Model& model, const StepperOptions& options, double h, int de
 
 }  // namespace
 
-StepReport Step(const Model& model, const StepperOptions& options, State* state, Data* data) {
+StepReport Step(const Model& model, const StepperOptions& options, State* state, Data* data,
+                const Eigen::VectorXd* external_wrench_W) {
   std::string error;
   if (!options.IsValid(&error)) throw std::invalid_argument(error);
   if (state->q.size() != 7 * model.num_moving() || state->v.size() != 6 * model.num_moving()) {
@@ -196,11 +197,15 @@ StepReport Step(const Model& model, const StepperOptions& options, State* state,
                                 std::to_string(7 * model.num_moving()) + " and v of " +
                                 std::to_string(6 * model.num_moving()) + " values");
   }
+  if (external_wrench_W && (external_wrench_W->size() != 6 * model.num_moving() || !external_wrench_W->allFinite())) {
+    throw std::invalid_argument("external wrench vector must hold " + std::to_string(6 * model.num_moving()) +
+                                " finite values (force, torque per moving body)");
+  }
   const auto wall_start = std::chrono::steady_clock::now();
   StepReport report;
   report.converged = true;
   const double t_end = state->t + options.h;
-  report.advanced = Advance(model, options, options.h, 0, state, data, &report);
+  report.advanced = Advance(model, options, options.h, 0, external_wrench_W, state, data, &report);
   if (report.advanced) state->t = t_end;  // exactly t + h, whatever the sub-steps summed to
   for (const ContactResult& contact : data->contacts) {
     if (contact.normal_force > options.contact_threshold) ++report.active_contacts;

@@ -24,7 +24,8 @@ void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed) {
   }
   State start = State::Initial(model);
   for (int i = 0; i < start.v.size(); ++i) start.v[i] = 2.0 * u(rng);
-  problem.BeginStep(model, start, 0.05);
+  const Eigen::VectorXd wrench = Eigen::VectorXd::Constant(6 * model.num_moving(), 0.3);
+  problem.BeginStep(model, start, 0.05, &wrench);
   problem.ResetTangentAxes(z);
 
   Eigen::VectorXd Phi, Phi_plus, Phi_minus;

@@ -193,3 +193,29 @@ TEST(TimeStepper, ClosestPointsOfTwoEllipsoidsMatchTheDistanceOracle) {
 
 }  // namespace
 }  // namespace implicit_sim
+
+namespace implicit_sim {
+namespace {
+
+TEST(TimeStepper, ExternalWrenchAcceleratesAFreeBodyAsNewtonSays) {
+  Model m;
+  m.gravity_W = Vec3::Zero();
+  m.bodies.push_back(test_models::FixedBody("ground", MakeHalfSpace()));
+  m.bodies.push_back(test_models::MovingBody("ball", MakeSphere(0.1), 2.0, test_models::MakePose(Vec3(0, 0, 1))));
+  const Model model = test_models::Finish(m);
+  Data data(model);
+  State state = State::Initial(model);
+  Eigen::VectorXd wrench(6);
+  wrench << 4.0, 0.0, 0.0, 0.0, 0.0, 0.8;  // 4 N along x, 0.8 N m about z
+  for (int i = 0; i < 10; ++i) ASSERT_TRUE(Step(model, StepperOptions(), &state, &data, &wrench).converged);
+  EXPECT_NEAR(state.v[0], 4.0 / 2.0 * 0.1, 1e-12);                     // a = F / m for 0.1 s
+  EXPECT_NEAR(state.v[5], 0.8 / (0.4 * 2.0 * 0.01) * 0.1, 1e-9);      // alpha = tau / I, I = 0.4 m r^2
+  Eigen::VectorXd bad = wrench;
+  bad[2] = std::nan("");
+  const State before = state;
+  EXPECT_THROW(Step(model, StepperOptions(), &state, &data, &bad), std::invalid_argument);
+  EXPECT_EQ(state.v, before.v);
+}
+
+}  // namespace
+}  // namespace implicit_sim

@@ -55,7 +55,8 @@ struct Model {
   // `pair_friction(i, j)` gives the friction of the pair; bodies must already be filled in.
   template <typename FrictionOf>
   void Finalize(FrictionOf pair_friction);
-  // A force scale (N) for the solver's row scaling: the largest weight plus applied force of a moving body, >= 1e-3.
+  // A force scale (N) for the solver's row scaling: over the moving bodies, the largest of |m g + f_applied| and
+  // m max(|g|, 1 m/s^2); at least 1e-3 N.
   double ForceScale() const;
 };
 

@@ -71,8 +71,9 @@ class StepProblem {
   int size() const { return size_; }
   const std::vector<PairBlock>& blocks() const { return blocks_; }
 
-  // Stores the start-of-step quantities (poses, velocities, inertia, gyroscopic terms).
-  void BeginStep(const Model& model, const State& start, double h);
+  // Stores the start-of-step quantities (poses, velocities, inertia, gyroscopic terms) and the external wrenches
+  // of the step: 6 values per moving body slot (force N, torque N m; world frame, at the centre of mass), or null.
+  void BeginStep(const Model& model, const State& start, double h, const Eigen::VectorXd* external_wrench_W);
 
   // The tangent basis (t, o) of a pair is built from n and a world reference axis fixed for the whole step
   // (DESIGN.md pitfall 3). UpdateTangentAxes keeps each pair's axis while |axis . n| < 0.9 for the normal in *z and
@@ -141,6 +142,7 @@ class StepProblem {
   std::vector<BodyStep> start_;
   std::vector<BodyEnd> end_;
   std::vector<Vec3> tangent_axis_;   // per pair
+  Eigen::VectorXd external_wrench_W_;  // per moving body slot: force, torque (world, at the centre of mass)
   int size_ = 0;
   double h_ = 0.0;
   double force_scale_ = 1.0;

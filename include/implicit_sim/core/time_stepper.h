@@ -55,9 +55,13 @@ class Data {
   StepReport report;
 };
 
-// Advances *state by one step of options.h. Throws std::invalid_argument for invalid options or a state whose sizes
-// do not match the model (and then changes nothing); solver trouble is reported, never thrown.
-StepReport Step(const Model& model, const StepperOptions& options, State* state, Data* data);
+// Advances *state by one step of options.h. `external_wrench_W`, if given, holds 6 values per moving body slot:
+// force (N) then torque (N m), world frame, at the centre of mass, constant over the step (added to the model's
+// constant applied wrench). Throws std::invalid_argument for invalid options, a state or wrench vector whose size
+// does not match the model, or a non-finite wrench (and then changes nothing); solver trouble is reported, never
+// thrown.
+StepReport Step(const Model& model, const StepperOptions& options, State* state, Data* data,
+                const Eigen::VectorXd* external_wrench_W = nullptr);
 
 // Fills the contact block of pair c in z from closest points computed at the configuration `state` by the distance
 // oracle (cold start), with multipliers consistent with the normal and zero forces except a normal force guess.
