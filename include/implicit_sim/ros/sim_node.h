@@ -1,0 +1,113 @@
+// The ROS node over the core: steps on its own thread, publishes /clock, /tf, /tf_static, ~contacts, ~markers,
+// ~step_stats, ~body_states and /diagnostics, and serves a gazebo_ros-like control API. README.md documents the
+// contract (topics, services, parameters).
+#pragma once
+
+#include <condition_variable>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <ros/ros.h>
+#include <std_srvs/Trigger.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include "implicit_sim/ApplyBodyWrench.h"
+#include "implicit_sim/BodyWrench.h"
+#include "implicit_sim/GetBodyState.h"
+#include "implicit_sim/SetBodyState.h"
+#include "implicit_sim/Step.h"
+#include "implicit_sim/core/model.h"
+#include "implicit_sim/core/time_stepper.h"
+
+namespace implicit_sim {
+
+// Node parameters (private namespace ~), validated at startup.
+struct NodeParams {
+  std::string scene;              // scene file path, or a name resolved as <scenes_dir>/<name>.urdf; "" -> robot_description
+  std::string scenes_dir;         // where scene names are looked up
+  double time_step = 0.01;        // s, (0, 1]
+  double tolerance = 1e-12;       // Newton tolerance, (0, 1)
+  int max_iterations = 100;       // [1, 100000]
+  double publish_rate = 30.0;     // Hz, (0, 1000]: /tf, ~body_states, ~contacts, ~markers
+  double real_time_factor = 1.0;  // [0, 1000]; 0 = as fast as possible
+  bool paused = false;
+  std::string world_frame = "world";
+  double force_marker_scale = 0.05;  // m/N, (0, 100]
+  // Reads and validates; throws std::invalid_argument naming the parameter and its range.
+  static NodeParams Read(const ros::NodeHandle& pnh);
+};
+
+class SimNode {
+ public:
+  // Loads the scene and sets up publishers and services; throws std::invalid_argument for a bad parameter or scene.
+  SimNode(ros::NodeHandle nh, ros::NodeHandle pnh);
+  ~SimNode();
+  // Starts the physics and publishing threads and blocks until ROS shuts down.
+  void Run();
+
+ private:
+  struct TimedWrench {
+    int body;            // moving body receiving it
+    int frame_body;      // body whose link frame expresses it, -1 for the world frame
+    Vec3 point, force, torque;  // in that frame (m, N, N m)
+    double start, end;   // simulation time (s); end < 0: until cleared
+  };
+
+  double SimTime() const { return time_offset_ + state_.t; }
+  void StepLocked();                 // one step with the active wrenches; mutex held
+  void ComputeWrenchesLocked();      // fills wrench_W_ for the step starting now
+  void PhysicsLoop();
+  void PublishLoop();
+  void PublishClock(double sim_time);
+  void PublishStepStats(const StepReport& report, double sim_time, uint64_t step, double rtf);
+  void UpdateDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status);
+  int FindBodyOrFail(const std::string& name, bool must_move, std::string* error) const;
+
+  bool OnPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
+  bool OnUnpause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
+  bool OnReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
+  bool OnClearWrenches(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
+  bool OnStep(implicit_sim::Step::Request& req, implicit_sim::Step::Response& res);
+  bool OnGetBodyState(implicit_sim::GetBodyState::Request& req, implicit_sim::GetBodyState::Response& res);
+  bool OnSetBodyState(implicit_sim::SetBodyState::Request& req, implicit_sim::SetBodyState::Response& res);
+  bool OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req, implicit_sim::ApplyBodyWrench::Response& res);
+  void OnWrenchCommand(const implicit_sim::BodyWrench::ConstPtr& msg);
+
+  ros::NodeHandle nh_, pnh_;
+  NodeParams params_;
+  const Model model_;
+  StepperOptions options_;
+
+  // Guarded by mutex_.
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  State state_, initial_state_, backup_;
+  Data data_;
+  double time_offset_ = 0.0;      // simulation time = time_offset_ + state_.t (reset keeps time monotonic)
+  bool paused_ = false, shutdown_ = false, restart_pacing_ = true;
+  uint64_t step_count_ = 0;
+  StepReport last_report_;
+  std::vector<TimedWrench> wrenches_;
+  Eigen::VectorXd commanded_W_;   // ~wrench_cmd, per moving slot: force, torque at the link origin (world)
+  Eigen::VectorXd wrench_W_;      // the wrench vector handed to the core (at the centre of mass)
+  long diag_steps_ = 0, diag_nonconverged_ = 0, diag_failed_ = 0, dropped_commands_ = 0;
+  double rtf_ = 0.0;
+  std::string last_failure_;
+
+  std::mutex clock_mutex_;
+  double last_clock_ = -1.0;
+
+  ros::Publisher clock_pub_, contacts_pub_, markers_pub_, stats_pub_, body_states_pub_;
+  std::vector<ros::ServiceServer> services_;
+  ros::Subscriber wrench_sub_;
+  tf2_ros::TransformBroadcaster tf_broadcaster_;
+  tf2_ros::StaticTransformBroadcaster static_broadcaster_;
+  diagnostic_updater::Updater diagnostics_;
+  std::thread physics_thread_, publish_thread_;
+};
+
+}  // namespace implicit_sim

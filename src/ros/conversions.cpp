@@ -1,0 +1,252 @@
+#include "implicit_sim/ros/conversions.h"
+
+#include <cmath>
+
+namespace implicit_sim {
+namespace ros_conversions {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std_msgs::ColorRGBA Color(float r, float g, float b, float a) {
+  std_msgs::ColorRGBA c;
+  c.r = r;
+  c.g = g;
+  c.b = b;
+  c.a = a;
+  return c;
+}
+
+geometry_msgs::Point ToPointMsg(const Vec3& p) {
+  geometry_msgs::Point m;
+  m.x = p.x();
+  m.y = p.y();
+  m.z = p.z();
+  return m;
+}
+
+geometry_msgs::Vector3 ToVectorMsg(const Vec3& v) {
+  geometry_msgs::Vector3 m;
+  m.x = v.x();
+  m.y = v.y();
+  m.z = v.z();
+  return m;
+}
+
+bool Inside(const ConvexShape& shape, const Vec3& x_S) {
+  for (const Inequality& q : shape.inequalities) {
+    if (q.Value(x_S) > 0.0) return false;
+  }
+  return true;
+}
+
+// Distance from the shape-frame origin to the boundary along u, by bisection (the shape is convex and contains
+// its origin).
+double RayToBoundary(const ConvexShape& shape, const Vec3& u, double max_length) {
+  double lo = 0.0, hi = max_length;
+  for (int i = 0; i < 40; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (Inside(shape, mid * u) ? lo : hi) = mid;
+  }
+  return lo;
+}
+
+// A TRIANGLE_LIST of the boundary, from rays on a latitude-longitude grid of directions.
+void RayCastMesh(const ConvexShape& shape, visualization_msgs::Marker* marker) {
+  const int n_lat = 32, n_lon = 64;
+  const double max_length = std::isfinite(shape.BoundingRadius()) ? 1.01 * shape.BoundingRadius() : 10.0;
+  auto vertex = [&](int i, int j) {
+    const double theta = kPi * i / n_lat, phi = 2.0 * kPi * j / n_lon;
+    const Vec3 u(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+    return ToPointMsg(RayToBoundary(shape, u, max_length) * u);
+  };
+  marker->type = visualization_msgs::Marker::TRIANGLE_LIST;
+  marker->scale.x = marker->scale.y = marker->scale.z = 1.0;
+  for (int i = 0; i < n_lat; ++i) {
+    for (int j = 0; j < n_lon; ++j) {
+      const auto a = vertex(i, j), b = vertex(i + 1, j), c = vertex(i + 1, j + 1), d = vertex(i, j + 1);
+      marker->points.insert(marker->points.end(), {a, b, c, a, c, d});
+    }
+  }
+}
+
+}  // namespace
+
+geometry_msgs::Pose ToPoseMsg(const Pose& X) {
+  geometry_msgs::Pose m;
+  m.position = ToPointMsg(X.translation());
+  const Eigen::Quaterniond q(X.linear());
+  m.orientation.w = q.w();
+  m.orientation.x = q.x();
+  m.orientation.y = q.y();
+  m.orientation.z = q.z();
+  return m;
+}
+
+geometry_msgs::Transform ToTransformMsg(const Pose& X) {
+  const geometry_msgs::Pose p = ToPoseMsg(X);
+  geometry_msgs::Transform t;
+  t.translation.x = p.position.x;
+  t.translation.y = p.position.y;
+  t.translation.z = p.position.z;
+  t.rotation = p.orientation;
+  return t;
+}
+
+Vec3 ToVec3(const geometry_msgs::Vector3& v) { return Vec3(v.x, v.y, v.z); }
+Vec3 ToVec3(const geometry_msgs::Point& p) { return Vec3(p.x, p.y, p.z); }
+
+Pose LinkPose(const Model& model, const State& state, int body) {
+  return state.X_WB(model, body) * model.bodies[body].X_BL;
+}
+
+implicit_sim::BodyState ToBodyStateMsg(const Model& model, const State& state, int body) {
+  implicit_sim::BodyState msg;
+  msg.name = model.bodies[body].name;
+  const Pose X_WL = LinkPose(model, state, body);
+  msg.pose = ToPoseMsg(X_WL);
+  const int slot = model.velocity_slot[body];
+  if (slot >= 0) {
+    const Vec3 w = state.w_WB(slot);
+    const Vec3 v_L = state.v_WB(slot) + w.cross(X_WL.translation() - state.X_WB(model, body).translation());
+    msg.twist.linear = ToVectorMsg(v_L);
+    msg.twist.angular = ToVectorMsg(w);
+  }
+  return msg;
+}
+
+bool SetBodyStateFromMsg(const Model& model, int body, const implicit_sim::BodyState& msg, State* state,
+                         std::string* error) {
+  const int slot = model.velocity_slot[body];
+  if (slot < 0) {
+    *error = "body '" + model.bodies[body].name + "' is fixed";
+    return false;
+  }
+  const auto& o = msg.pose.orientation;
+  const Eigen::Vector4d q(o.w, o.x, o.y, o.z);
+  const Vec3 p_L = ToVec3(msg.pose.position), v_L = ToVec3(msg.twist.linear), w = ToVec3(msg.twist.angular);
+  if (!q.allFinite() || !p_L.allFinite() || !v_L.allFinite() || !w.allFinite()) {
+    *error = "pose and twist must be finite";
+    return false;
+  }
+  if (q.norm() < 1e-9) {
+    *error = "orientation quaternion must be non-zero (got norm " + std::to_string(q.norm()) + ")";
+    return false;
+  }
+  Pose X_WL = Pose::Identity();
+  X_WL.translation() = p_L;
+  X_WL.linear() = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+  const Body& b = model.bodies[body];
+  const Pose X_WB = X_WL * b.X_BL.inverse();
+  const Vec3 v_B = v_L + w.cross(X_WB.translation() - p_L);
+  static const char* kAxes[6] = {"x", "y", "z", "rx", "ry", "rz"};
+  for (int i = 0; i < 6; ++i) {
+    const double value = i < 3 ? v_B[i] : w[i - 3];
+    if (b.locked[i] && std::abs(value) > 1e-12) {
+      *error = std::string("body '") + b.name + "' has its axis " + kAxes[i] + " locked: its velocity must be 0";
+      return false;
+    }
+  }
+  const Eigen::Quaterniond quat(X_WB.linear());
+  state->q.segment<3>(7 * slot) = X_WB.translation();
+  state->q.segment<4>(7 * slot + 3) << quat.w(), quat.x(), quat.y(), quat.z();
+  state->v.segment<3>(6 * slot) = v_B;
+  state->v.segment<3>(6 * slot + 3) = w;
+  return true;
+}
+
+implicit_sim::ContactState ToContactMsg(const Model& model, int pair, const ContactResult& c) {
+  implicit_sim::ContactState msg;
+  msg.link1 = model.bodies[model.pairs[pair].body1].name;
+  msg.link2 = model.bodies[model.pairs[pair].body2].name;
+  msg.a1 = ToPointMsg(c.p_WA1);
+  msg.a2 = ToPointMsg(c.p_WA2);
+  msg.normal = ToVectorMsg(c.n_W);
+  msg.gap = c.gap;
+  msg.normal_force = c.normal_force;
+  msg.friction_force = ToVectorMsg(c.friction_force_W);
+  msg.torsional_moment = c.torsional_moment;
+  msg.slip_speed = c.slip_speed;
+  return msg;
+}
+
+visualization_msgs::MarkerArray ShapeMarkers(const Model& model) {
+  visualization_msgs::MarkerArray out;
+  for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
+    const Body& body = model.bodies[b];
+    const ConvexShape& shape = body.shape;
+    if (shape.inequalities.empty()) continue;
+    visualization_msgs::Marker m;
+    m.header.frame_id = body.name;
+    m.ns = "shapes";
+    m.id = b;
+    m.action = visualization_msgs::Marker::ADD;
+    m.frame_locked = true;
+    m.pose = ToPoseMsg(body.X_BL.inverse() * shape.X_BS);  // the shape frame in the link frame
+    m.color = body.is_fixed ? Color(0.6f, 0.6f, 0.65f, 0.6f) : Color(0.95f, 0.55f, 0.15f, 0.9f);
+    const Vec3 s = shape.size;
+    switch (shape.type) {
+      case ShapeType::kSphere:
+      case ShapeType::kEllipsoid:
+        m.type = visualization_msgs::Marker::SPHERE;
+        m.scale = ToVectorMsg(2.0 * s);
+        break;
+      case ShapeType::kBox:
+        m.type = visualization_msgs::Marker::CUBE;
+        m.scale = ToVectorMsg(2.0 * s);
+        break;
+      case ShapeType::kCylinder:
+        m.type = visualization_msgs::Marker::CYLINDER;
+        m.scale = ToVectorMsg(Vec3(2.0 * s[0], 2.0 * s[0], 2.0 * s[2]));
+        break;
+      case ShapeType::kHalfSpace: {  // a 10 m x 10 m slab just below the plane z = 0 of the shape frame
+        m.type = visualization_msgs::Marker::CUBE;
+        m.scale = ToVectorMsg(Vec3(10.0, 10.0, 0.002));
+        m.pose = ToPoseMsg(body.X_BL.inverse() * shape.X_BS * Pose(Eigen::Translation3d(0, 0, -0.001)));
+        break;
+      }
+      default:
+        RayCastMesh(shape, &m);
+    }
+    out.markers.push_back(m);
+  }
+  return out;
+}
+
+void AppendContactMarkers(int pair, const ContactResult& c, bool active,
+                          const std::string& world_frame, double force_scale, visualization_msgs::MarkerArray* out) {
+  const char* namespaces[3] = {"contact_points", "contact_normals", "contact_forces"};
+  for (int k = 0; k < 3; ++k) {
+    visualization_msgs::Marker m;
+    m.header.frame_id = world_frame;
+    m.ns = namespaces[k];
+    m.id = pair;
+    m.pose.orientation.w = 1.0;
+    if (!active) {
+      m.action = visualization_msgs::Marker::DELETE;
+      out->markers.push_back(m);
+      continue;
+    }
+    m.action = visualization_msgs::Marker::ADD;
+    if (k == 0) {
+      m.type = visualization_msgs::Marker::SPHERE;
+      m.pose.position = ToPointMsg(c.p_WA1);
+      m.scale.x = m.scale.y = m.scale.z = 0.05;
+      m.color = Color(0.9f, 0.1f, 0.1f, 1.0f);
+    } else {
+      m.type = visualization_msgs::Marker::ARROW;
+      const Vec3 force = c.normal_force * c.n_W + c.friction_force_W;
+      const Vec3 start = k == 1 ? c.p_WA2 : c.p_WA1;
+      const Vec3 end = k == 1 ? Vec3(c.p_WA2 + 0.3 * c.n_W) : Vec3(c.p_WA1 + force_scale * force);
+      m.points = {ToPointMsg(start), ToPointMsg(end)};
+      m.scale.x = 0.02;  // shaft diameter
+      m.scale.y = 0.04;  // head diameter
+      m.scale.z = 0.0;
+      m.color = k == 1 ? Color(0.1f, 0.4f, 0.95f, 1.0f) : Color(0.1f, 0.8f, 0.2f, 1.0f);
+    }
+    out->markers.push_back(m);
+  }
+}
+
+}  // namespace ros_conversions
+}  // namespace implicit_sim
