@@ -1,4 +1,6 @@
 // implicit_sim_node: the simulator as a ROS node (see README.md for topics, services and parameters).
+#include <iostream>
+
 #include <ros/ros.h>
 
 #include "implicit_sim/ros/sim_node.h"
@@ -9,7 +11,8 @@ int main(int argc, char** argv) {
     implicit_sim::SimNode node(ros::NodeHandle(), ros::NodeHandle("~"));
     node.Run();
   } catch (const std::exception& e) {
-    ROS_FATAL("implicit_sim_node: %s", e.what());
+    std::cerr << "implicit_sim_node: " << e.what() << std::endl;  // one line naming the parameter or link
+    ROS_FATAL("implicit_sim_node: %s", e.what());                  // and on /rosout
     return 1;
   }
   return 0;

@@ -10,6 +10,7 @@
 #include "implicit_sim/BodyStates.h"
 #include "implicit_sim/Contacts.h"
 #include "implicit_sim/StepStats.h"
+#include "implicit_sim/core/run_output.h"
 #include "implicit_sim/core/urdf_loader.h"
 #include "implicit_sim/ros/conversions.h"
 
@@ -31,8 +32,8 @@ T ReadParam(const ros::NodeHandle& pnh, const std::string& name, T fallback) {
 void CheckRange(const std::string& name, double value, double lo, double hi, bool lo_open, const std::string& unit) {
   const bool ok = std::isfinite(value) && (lo_open ? value > lo : value >= lo) && value <= hi;
   if (!ok) {
-    throw std::invalid_argument("parameter ~" + name + " = " + std::to_string(value) + " is out of range " +
-                                (lo_open ? "(" : "[") + std::to_string(lo) + ", " + std::to_string(hi) + "] " + unit);
+    throw std::invalid_argument("parameter ~" + name + " = " + FormatNumber(value) + " is out of range " +
+                                (lo_open ? "(" : "[") + FormatNumber(lo) + ", " + FormatNumber(hi) + "] " + unit);
   }
 }
 
@@ -68,8 +69,7 @@ NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
   p.world_frame = ReadParam(pnh, "world_frame", p.world_frame);
   p.force_marker_scale = ReadParam(pnh, "force_marker_scale", p.force_marker_scale);
   CheckRange("time_step", p.time_step, 0.0, 1.0, true, "s");
-  CheckRange("tolerance", p.tolerance, 0.0, 1.0, true, "(exclusive of 1)");
-  if (p.tolerance >= 1.0) CheckRange("tolerance", p.tolerance, 0.0, 0.999999, true, "");
+  CheckRange("tolerance", p.tolerance, 0.0, 0.1, true, "");
   CheckRange("max_iterations", p.max_iterations, 1, 100000, false, "");
   CheckRange("publish_rate", p.publish_rate, 0.0, 1000.0, true, "Hz");
   CheckRange("real_time_factor", p.real_time_factor, 0.0, 1000.0, false, "(0: as fast as possible)");
@@ -268,7 +268,8 @@ void SimNode::PublishLoop() {
   State snapshot = State::Initial(model_);
   std::vector<ContactResult> contacts(model_.pairs.size());
   ros::WallRate rate(params_.publish_rate);
-  WallClock::time_point last_diagnostics = WallClock::now();
+  WallClock::time_point last_diagnostics = WallClock::now(), last_tf_wall;
+  double last_tf_time = -1.0;
   while (true) {
     double sim;
     {
@@ -280,6 +281,13 @@ void SimNode::PublishLoop() {
     }
     const ros::Time stamp = ros::Time().fromSec(sim);
     PublishClock(sim);
+    // /tf only when time has moved (tf2 listeners warn about repeated stamps), and every 5 s while paused so that
+    // late subscribers get the poses.
+    const bool moved = sim != last_tf_time || WallClock::now() - last_tf_wall >= std::chrono::seconds(5);
+    if (moved) {
+      last_tf_time = sim;
+      last_tf_wall = WallClock::now();
+    }
     std::vector<geometry_msgs::TransformStamped> transforms;
     for (int b : model_.moving_bodies) {
       geometry_msgs::TransformStamped t;
@@ -289,7 +297,7 @@ void SimNode::PublishLoop() {
       t.transform = conv::ToTransformMsg(conv::LinkPose(model_, snapshot, b));
       transforms.push_back(t);
     }
-    tf_broadcaster_.sendTransform(transforms);  // one batched /tf message
+    if (moved) tf_broadcaster_.sendTransform(transforms);  // one batched /tf message
     if (body_states_pub_.getNumSubscribers() > 0) {
       implicit_sim::BodyStates msg;
       msg.header.stamp = stamp;

@@ -1,0 +1,333 @@
+// rostest for implicit_sim_node on the P3 scene (test/ros/sim_node_p3.test starts it paused, as fast as possible).
+// The tests share one node; each one that needs the initial state calls ~reset first.
+#include <sys/wait.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+#include <rosgraph_msgs/Clock.h>
+#include <std_srvs/Trigger.h>
+#include <tf2_ros/transform_listener.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include "implicit_sim/ApplyBodyWrench.h"
+#include "implicit_sim/BodyStates.h"
+#include "implicit_sim/BodyWrench.h"
+#include "implicit_sim/Contacts.h"
+#include "implicit_sim/GetBodyState.h"
+#include "implicit_sim/SetBodyState.h"
+#include "implicit_sim/Step.h"
+#include "implicit_sim/StepStats.h"
+#include "implicit_sim/core/time_stepper.h"
+#include "implicit_sim/core/urdf_loader.h"
+
+namespace {
+
+const std::string kNs = "/implicit_sim/";
+using StepSrv = struct implicit_sim::Step;  // the service type; the core's Step() function hides the bare name
+constexpr double kH = 0.01;
+
+template <typename Srv>
+Srv Call(const std::string& name, Srv srv = Srv()) {
+  EXPECT_TRUE(ros::service::waitForService(kNs + name, ros::Duration(10)));
+  EXPECT_TRUE(ros::service::call(kNs + name, srv)) << name;
+  return srv;
+}
+
+bool Trigger(const std::string& name) { return Call<std_srvs::Trigger>(name).response.success; }
+
+StepSrv RunSteps(uint32_t n) {
+  StepSrv s;
+  s.request.steps = n;
+  return Call(std::string("step"), s);
+}
+
+implicit_sim::BodyState Ball() {
+  implicit_sim::GetBodyState g;
+  g.request.body = "ball";
+  g = Call(std::string("get_body_state"), g);
+  EXPECT_TRUE(g.response.success);
+  return g.response.state;
+}
+
+void ExpectSameState(const implicit_sim::BodyState& a, const implicit_sim::BodyState& b) {
+  EXPECT_EQ(a.pose.position.x, b.pose.position.x);
+  EXPECT_EQ(a.pose.position.y, b.pose.position.y);
+  EXPECT_EQ(a.pose.position.z, b.pose.position.z);
+  EXPECT_EQ(a.pose.orientation.w, b.pose.orientation.w);
+  EXPECT_EQ(a.pose.orientation.x, b.pose.orientation.x);
+  EXPECT_EQ(a.twist.linear.x, b.twist.linear.x);
+  EXPECT_EQ(a.twist.linear.z, b.twist.linear.z);
+  EXPECT_EQ(a.twist.angular.y, b.twist.angular.y);
+}
+
+double ClockNow() {
+  const auto msg = ros::topic::waitForMessage<rosgraph_msgs::Clock>("/clock", ros::Duration(10));
+  EXPECT_TRUE(msg != nullptr);
+  return msg ? msg->clock.toSec() : NAN;
+}
+
+// The headless core on the same scene file, for "same numbers" comparisons.
+implicit_sim::State CoreAfter(int steps) {
+  using namespace implicit_sim;
+  const Model model = LoadSceneFromFile(std::string(IMPLICIT_SIM_SOURCE_DIR) + "/scenes/p3_sphere_on_two_spheres.urdf");
+  Data data(model);
+  State state = State::Initial(model);
+  StepperOptions options;
+  options.h = kH;
+  for (int i = 0; i < steps; ++i) implicit_sim::Step(model, options, &state, &data);
+  return state;
+}
+
+std::string RunCommand(const std::string& command, int* exit_code) {
+  std::string output;
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+  std::array<char, 512> buffer;
+  while (pipe && fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
+  const int status = pipe ? pclose(pipe) : -1;
+  *exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return output;
+}
+
+TEST(SimNode, EveryTopicIsAdvertisedWithItsType) {
+  ros::topic::waitForMessage<rosgraph_msgs::Clock>("/clock", ros::Duration(10));
+  const std::pair<std::string, std::string> expected[] = {
+      {"/clock", "rosgraph_msgs/Clock"},
+      {"/tf", "tf2_msgs/TFMessage"},
+      {"/tf_static", "tf2_msgs/TFMessage"},
+      {"/diagnostics", "diagnostic_msgs/DiagnosticArray"},
+      {kNs + "contacts", "implicit_sim/Contacts"},
+      {kNs + "markers", "visualization_msgs/MarkerArray"},
+      {kNs + "step_stats", "implicit_sim/StepStats"},
+      {kNs + "body_states", "implicit_sim/BodyStates"}};
+  ros::master::V_TopicInfo topics;
+  ASSERT_TRUE(ros::master::getTopics(topics));
+  for (const auto& [name, type] : expected) {
+    bool found = false;
+    for (const auto& t : topics) found = found || (t.name == name && t.datatype == type);
+    EXPECT_TRUE(found) << name << " [" << type << "] is not advertised";
+  }
+}
+
+TEST(SimNode, EveryServiceAnswersWithItsType) {
+  for (const char* name : {"pause", "unpause", "reset", "clear_body_wrenches"}) {
+    std_srvs::Trigger t;
+    EXPECT_TRUE(ros::service::waitForService(kNs + name, ros::Duration(10))) << name;
+    EXPECT_TRUE(ros::service::call(kNs + name, t)) << name;
+  }
+  EXPECT_TRUE(Trigger("pause"));
+  implicit_sim::ApplyBodyWrench a;
+  implicit_sim::SetBodyState s;
+  EXPECT_TRUE(ros::service::call(kNs + "apply_body_wrench", a));  // typed calls fail on a type mismatch
+  EXPECT_TRUE(ros::service::call(kNs + "set_body_state", s));
+  EXPECT_TRUE(ros::service::exists(kNs + "get_body_state", false));
+  EXPECT_TRUE(ros::service::exists(kNs + "step", false));
+}
+
+TEST(SimNode, TfResolvesWorldToBall) {
+  tf2_ros::Buffer buffer;
+  tf2_ros::TransformListener listener(buffer);
+  std::string error;
+  EXPECT_TRUE(buffer.canTransform("world", "ball", ros::Time(0), ros::Duration(10), &error)) << error;
+  EXPECT_TRUE(buffer.canTransform("world", "sphere_b", ros::Time(0), ros::Duration(10), &error)) << error;
+  const auto t = buffer.lookupTransform("world", "sphere_b", ros::Time(0));
+  EXPECT_DOUBLE_EQ(t.transform.translation.y, 11.4);
+}
+
+TEST(SimNode, StepAdvancesTheClockByNhAndMatchesTheHeadlessCore) {
+  EXPECT_TRUE(Trigger("pause"));
+  EXPECT_TRUE(Trigger("reset"));
+  const double before = ClockNow();
+  const StepSrv s = RunSteps(100);
+  ASSERT_TRUE(s.response.success) << s.response.message;
+  EXPECT_NEAR(s.response.sim_time - before, 100 * kH, 1e-9);
+  ros::Duration(0.2).sleep();
+  EXPECT_NEAR(ClockNow() - before, 100 * kH, 1e-9);
+  const implicit_sim::State core = CoreAfter(100);
+  const implicit_sim::BodyState ball = Ball();
+  EXPECT_EQ(ball.pose.position.x, core.q[0]);
+  EXPECT_EQ(ball.pose.position.y, core.q[1]);
+  EXPECT_EQ(ball.pose.position.z, core.q[2]);
+  EXPECT_EQ(ball.twist.linear.x, core.v[0]);
+  EXPECT_EQ(ball.twist.linear.z, core.v[2]);
+  EXPECT_EQ(ball.twist.angular.y, core.v[4]);
+}
+
+TEST(SimNode, ContactsMatchTheReferenceForcesAtTheStart) {
+  EXPECT_TRUE(Trigger("reset"));
+  ASSERT_TRUE(RunSteps(1).response.success);
+  const auto msg = ros::topic::waitForMessage<implicit_sim::Contacts>(kNs + "contacts", ros::Duration(10));
+  ASSERT_TRUE(msg != nullptr);
+  ASSERT_EQ(msg->contacts.size(), 2u);
+  for (const auto& c : msg->contacts) {
+    EXPECT_EQ(c.link1, "ball");
+    const double reference = c.link2 == "sphere_a" ? 2.641 : 8.767;
+    EXPECT_NEAR(c.normal_force, reference, 0.01 * reference) << c.link2;
+    EXPECT_NEAR(std::hypot(std::hypot(c.normal.x, c.normal.y), c.normal.z), 1.0, 1e-9);
+    EXPECT_GE(c.gap, -1e-8);
+  }
+  const auto stats = ros::topic::waitForMessage<implicit_sim::StepStats>(kNs + "step_stats", ros::Duration(1));
+  (void)stats;  // step_stats is published per step; the next test checks its content
+}
+
+TEST(SimNode, StepStatsMarkersBodyStatesAndDiagnosticsArePublished) {
+  ros::NodeHandle nh;
+  implicit_sim::StepStats::ConstPtr stats;
+  ros::Subscriber sub = nh.subscribe<implicit_sim::StepStats>(
+      kNs + "step_stats", 10, [&](const implicit_sim::StepStats::ConstPtr& m) { stats = m; });
+  ros::Duration(0.5).sleep();
+  ASSERT_TRUE(RunSteps(3).response.success);
+  for (int i = 0; i < 50 && !stats; ++i) ros::Duration(0.05).sleep();
+  ASSERT_TRUE(stats != nullptr);
+  EXPECT_TRUE(stats->converged);
+  EXPECT_EQ(stats->status, "converged");
+  EXPECT_GT(stats->iterations, 0u);
+  EXPECT_LE(stats->residual, 1e-12);
+  const auto markers = ros::topic::waitForMessage<visualization_msgs::MarkerArray>(kNs + "markers", ros::Duration(10));
+  ASSERT_TRUE(markers != nullptr);
+  int shapes = 0, contact_points = 0;
+  for (const auto& m : markers->markers) {
+    shapes += m.ns == "shapes";
+    contact_points += m.ns == "contact_points" && m.action == visualization_msgs::Marker::ADD;
+  }
+  EXPECT_EQ(shapes, 3);
+  EXPECT_EQ(contact_points, 2);
+  const auto states = ros::topic::waitForMessage<implicit_sim::BodyStates>(kNs + "body_states", ros::Duration(10));
+  ASSERT_TRUE(states != nullptr);
+  ASSERT_EQ(states->bodies.size(), 3u);
+  EXPECT_EQ(states->bodies[0].name, "ball");
+  const auto diagnostics =
+      ros::topic::waitForMessage<diagnostic_msgs::DiagnosticArray>("/diagnostics", ros::Duration(10));
+  ASSERT_TRUE(diagnostics != nullptr);
+  ASSERT_FALSE(diagnostics->status.empty());
+  EXPECT_EQ(diagnostics->status[0].level, diagnostic_msgs::DiagnosticStatus::OK);
+}
+
+TEST(SimNode, ResetRestoresTheInitialStateExactly) {
+  EXPECT_TRUE(Trigger("reset"));
+  const implicit_sim::BodyState initial = Ball();
+  EXPECT_EQ(initial.pose.position.y, 6.62105263157895);
+  EXPECT_EQ(initial.pose.position.z, 8.78417110772903);
+  ASSERT_TRUE(RunSteps(25).response.success);
+  EXPECT_NE(Ball().pose.position.x, initial.pose.position.x);
+  const double before = ClockNow();
+  EXPECT_TRUE(Trigger("reset"));
+  ExpectSameState(Ball(), initial);
+  EXPECT_GE(ClockNow(), before);  // simulation time does not jump back
+}
+
+TEST(SimNode, BadServiceCallsAreRefusedAndChangeNothing) {
+  EXPECT_TRUE(Trigger("reset"));
+  ASSERT_TRUE(RunSteps(5).response.success);
+  const implicit_sim::BodyState before = Ball();
+  implicit_sim::GetBodyState get;
+  get.request.body = "nobody";
+  EXPECT_FALSE(Call(std::string("get_body_state"), get).response.success);
+  EXPECT_FALSE(RunSteps(0).response.success);
+  implicit_sim::SetBodyState set;
+  set.request.state = before;
+  set.request.state.name = "nobody";
+  EXPECT_FALSE(Call(std::string("set_body_state"), set).response.success);
+  set.request.state.name = "sphere_a";
+  EXPECT_FALSE(Call(std::string("set_body_state"), set).response.success);
+  set.request.state = before;
+  set.request.state.pose.orientation.w = set.request.state.pose.orientation.x = 0.0;
+  set.request.state.pose.orientation.y = set.request.state.pose.orientation.z = 0.0;
+  EXPECT_FALSE(Call(std::string("set_body_state"), set).response.success);
+  set.request.state = before;
+  set.request.state.twist.linear.x = NAN;
+  EXPECT_FALSE(Call(std::string("set_body_state"), set).response.success);
+  implicit_sim::ApplyBodyWrench wrench;
+  wrench.request.body = "nobody";
+  wrench.request.duration = 1.0;
+  EXPECT_FALSE(Call(std::string("apply_body_wrench"), wrench).response.success);
+  wrench.request.body = "ball";
+  wrench.request.wrench.force.x = INFINITY;
+  EXPECT_FALSE(Call(std::string("apply_body_wrench"), wrench).response.success);
+  wrench.request.wrench.force.x = 1.0;
+  wrench.request.duration = 0.0;
+  EXPECT_FALSE(Call(std::string("apply_body_wrench"), wrench).response.success);
+  wrench.request.duration = 1.0;
+  wrench.request.reference_frame = "no_frame";
+  EXPECT_FALSE(Call(std::string("apply_body_wrench"), wrench).response.success);
+  ExpectSameState(Ball(), before);
+}
+
+TEST(SimNode, StepIsRefusedWhileRunning) {
+  EXPECT_TRUE(Trigger("unpause"));
+  const StepSrv s = RunSteps(1);
+  EXPECT_FALSE(s.response.success);
+  EXPECT_NE(s.response.message.find("running"), std::string::npos);
+  EXPECT_TRUE(Trigger("pause"));
+}
+
+TEST(SimNode, NonFiniteWrenchCommandsAreDroppedAndWrenchesMoveTheBall) {
+  ros::NodeHandle nh;
+  ros::Publisher pub = nh.advertise<implicit_sim::BodyWrench>(kNs + "wrench_cmd", 10);
+  EXPECT_TRUE(Trigger("reset"));
+  for (int i = 0; i < 30 && pub.getNumSubscribers() == 0; ++i) ros::Duration(0.1).sleep();
+  implicit_sim::BodyWrench cmd;
+  cmd.body = "ball";
+  cmd.wrench.force.z = NAN;
+  pub.publish(cmd);
+  ros::Duration(0.3).sleep();
+  ASSERT_TRUE(RunSteps(10).response.success);
+  const implicit_sim::State core = CoreAfter(10);
+  EXPECT_EQ(Ball().pose.position.x, core.q[0]);  // the NaN command was dropped: same numbers as without it
+  // A 100 N upward push for 0.05 s lifts the ball off both spheres.
+  implicit_sim::ApplyBodyWrench wrench;
+  wrench.request.body = "ball";
+  wrench.request.wrench.force.z = 100.0;
+  wrench.request.duration = 0.05;
+  ASSERT_TRUE(Call(std::string("apply_body_wrench"), wrench).response.success);
+  ASSERT_TRUE(RunSteps(10).response.success);
+  EXPECT_GT(Ball().twist.linear.z, 1.0);
+  EXPECT_TRUE(Trigger("clear_body_wrenches"));
+}
+
+TEST(SimNode, ABadParameterOrSceneStopsTheNodeAtStartup) {
+  int code = 0;
+  std::string out = RunCommand(std::string("timeout 30 ") + IMPLICIT_SIM_NODE +
+                                   " __name:=bad_param _scene:=p3_sphere_on_two_spheres _time_step:=-1",
+                               &code);
+  EXPECT_EQ(code, 1) << out;
+  EXPECT_NE(out.find("~time_step"), std::string::npos) << out;
+  out = RunCommand(std::string("timeout 30 ") + IMPLICIT_SIM_NODE + " __name:=bad_scene _scene:=no_such_scene", &code);
+  EXPECT_EQ(code, 1) << out;
+  EXPECT_NE(out.find("~scene"), std::string::npos) << out;
+}
+
+TEST(SimNode, ABagRecordedWhileRunningHoldsEveryTopic) {
+  EXPECT_TRUE(Trigger("reset"));
+  EXPECT_TRUE(Trigger("unpause"));
+  const std::string bag = "/tmp/implicit_sim_rostest.bag";
+  int code = 0;
+  std::string out = RunCommand("rm -f " + bag + "; timeout 60 rosbag record -O " + bag +
+                                   " --duration=3 /clock /tf /tf_static " + kNs + "contacts " + kNs + "markers " +
+                                   kNs + "body_states " + kNs + "step_stats",
+                               &code);
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_TRUE(Trigger("pause"));
+  out = RunCommand("rosbag info " + bag, &code);
+  EXPECT_EQ(code, 0) << out;
+  for (const std::string topic : {"/clock", "/tf ", "/tf_static", "contacts", "markers", "body_states", "step_stats"}) {
+    EXPECT_NE(out.find(topic), std::string::npos) << topic << " missing in\n" << out;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_sim_node");
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  const int result = RUN_ALL_TESTS();
+  ros::shutdown();
+  return result;
+}
