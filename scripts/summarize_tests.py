@@ -12,9 +12,8 @@ def main(root):
     files = sorted(glob.glob(os.path.join(root, "**", "*.xml"), recursive=True))
     passed, failed = 0, 0
     for path in files:
-        name = os.path.basename(path)
-        if name.startswith("rosunit-"):  # rostest writes its cases twice; count the rostest-*.xml copy only
-            continue
+        # gtest-*.xml: the core gtests; rosunit-*.xml: the cases of a rostest's gtest node; rostest-*.xml: one case
+        # per rostest (fails when the test node crashed, timed out or reported failures).
         try:
             tree = ET.parse(path)
         except ET.ParseError as error:
@@ -28,7 +27,7 @@ def main(root):
                 print(f"FAILED {case.get('classname')}.{case.get('name')}: {problems[0].get('message', '')[:300]}")
             elif case.find("skipped") is None:
                 passed += 1
-    expected = ["gtest-test_core.xml", "rostest-test_ros_sim_node_p3.xml"]
+    expected = ["gtest-test_core.xml", "rostest-test_ros_sim_node_p3.xml", "rosunit-test_sim_node.xml"]
     for name in expected:
         if not any(os.path.basename(f) == name for f in files):
             print(f"FAILED missing result file {name} (did the test binary build and run?)")

@@ -28,10 +28,12 @@ NewtonResult SemismoothNewton::Solve(StepProblem* problem, const NewtonOptions& 
   NewtonResult result;
   problem->Evaluate(*z, &Phi_, &J_);
   double merit = 0.5 * Phi_.squaredNorm();
+  // Relative part: rows such as a1 - a2 - d n carry coordinates, whose rounding error grows with their size.
+  const auto tolerance = [&]() { return options.tolerance * (1.0 + z->lpNorm<Eigen::Infinity>()); };
   for (result.iterations = 0; result.iterations < options.max_iterations; ++result.iterations) {
     result.residual = std::sqrt(2.0 * merit);
     if (!std::isfinite(merit)) break;
-    if (result.residual <= options.tolerance) {
+    if (result.residual <= tolerance()) {
       result.converged = true;
       return result;
     }
@@ -57,7 +59,7 @@ NewtonResult SemismoothNewton::Solve(StepProblem* problem, const NewtonOptions& 
     merit = 0.5 * Phi_.squaredNorm();
   }
   result.residual = std::sqrt(2.0 * merit);
-  result.converged = std::isfinite(merit) && result.residual <= options.tolerance;
+  result.converged = std::isfinite(merit) && result.residual <= tolerance();
   return result;
 }
 

@@ -110,6 +110,18 @@ void StepProblem::UpdateTangentAxes(Eigen::VectorXd* z) {
   }
 }
 
+void StepProblem::PredictClosestPoints(Eigen::VectorXd* z) const {
+  for (size_t c = 0; c < blocks_.size(); ++c) {
+    const ContactPair& pair = model_.pairs[c];
+    const int off = blocks_[c].offset;
+    for (const auto& [body, column] : {std::make_pair(pair.body1, off + pi::kA1), std::make_pair(pair.body2, off + pi::kA2)}) {
+      z->segment<3>(column) += h_ * start_[body].v0;
+    }
+    const Vec3 n = z->segment<3>(off + pi::kN);
+    (*z)[off + pi::kD] = n.dot(z->segment<3>(off + pi::kA1) - z->segment<3>(off + pi::kA2));
+  }
+}
+
 void StepProblem::SeedFriction(Eigen::VectorXd* z) const {
   for (size_t c = 0; c < blocks_.size(); ++c) {
     const ContactPair& pair = model_.pairs[c];

@@ -122,6 +122,7 @@ NewtonResult SolveStep(const Model& model, const StepperOptions& options, double
   data->z_start = data->z;  // the previous step's solution; its velocities are the state's
   data->z_start.head(6 * model.num_moving()) = state.v;
   problem.UpdateTangentAxes(&data->z_start);
+  problem.PredictClosestPoints(&data->z_start);
   const NewtonResult warm = solve_from_start();
   if (warm.converged) return warm;
   report->cold_restarts++;

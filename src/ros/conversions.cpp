@@ -214,7 +214,8 @@ visualization_msgs::MarkerArray ShapeMarkers(const Model& model) {
 }
 
 void AppendContactMarkers(int pair, const ContactResult& c, bool active,
-                          const std::string& world_frame, double force_scale, visualization_msgs::MarkerArray* out) {
+                          const std::string& world_frame, double force_scale, double size,
+                          visualization_msgs::MarkerArray* out) {
   const char* namespaces[3] = {"contact_points", "contact_normals", "contact_forces"};
   for (int k = 0; k < 3; ++k) {
     visualization_msgs::Marker m;
@@ -231,16 +232,16 @@ void AppendContactMarkers(int pair, const ContactResult& c, bool active,
     if (k == 0) {
       m.type = visualization_msgs::Marker::SPHERE;
       m.pose.position = ToPointMsg(c.p_WA1);
-      m.scale.x = m.scale.y = m.scale.z = 0.05;
+      m.scale.x = m.scale.y = m.scale.z = size;
       m.color = Color(0.9f, 0.1f, 0.1f, 1.0f);
     } else {
       m.type = visualization_msgs::Marker::ARROW;
       const Vec3 force = c.normal_force * c.n_W + c.friction_force_W;
       const Vec3 start = k == 1 ? c.p_WA2 : c.p_WA1;
-      const Vec3 end = k == 1 ? Vec3(c.p_WA2 + 0.3 * c.n_W) : Vec3(c.p_WA1 + force_scale * force);
+      const Vec3 end = k == 1 ? Vec3(c.p_WA2 + 6.0 * size * c.n_W) : Vec3(c.p_WA1 + force_scale * force);
       m.points = {ToPointMsg(start), ToPointMsg(end)};
-      m.scale.x = 0.02;  // shaft diameter
-      m.scale.y = 0.04;  // head diameter
+      m.scale.x = 0.4 * size;  // shaft diameter
+      m.scale.y = 0.8 * size;  // head diameter
       m.scale.z = 0.0;
       m.color = k == 1 ? Color(0.1f, 0.4f, 0.95f, 1.0f) : Color(0.1f, 0.8f, 0.2f, 1.0f);
     }

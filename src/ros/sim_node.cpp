@@ -68,12 +68,14 @@ NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
   p.paused = ReadParam(pnh, "paused", p.paused);
   p.world_frame = ReadParam(pnh, "world_frame", p.world_frame);
   p.force_marker_scale = ReadParam(pnh, "force_marker_scale", p.force_marker_scale);
+  p.contact_marker_size = ReadParam(pnh, "contact_marker_size", p.contact_marker_size);
   CheckRange("time_step", p.time_step, 0.0, 1.0, true, "s");
   CheckRange("tolerance", p.tolerance, 0.0, 0.1, true, "");
   CheckRange("max_iterations", p.max_iterations, 1, 100000, false, "");
   CheckRange("publish_rate", p.publish_rate, 0.0, 1000.0, true, "Hz");
   CheckRange("real_time_factor", p.real_time_factor, 0.0, 1000.0, false, "(0: as fast as possible)");
   CheckRange("force_marker_scale", p.force_marker_scale, 0.0, 100.0, true, "m/N");
+  CheckRange("contact_marker_size", p.contact_marker_size, 0.0, 100.0, true, "m");
   if (p.world_frame.empty()) throw std::invalid_argument("parameter ~world_frame must not be empty");
   return p;
 }
@@ -325,7 +327,8 @@ void SimNode::PublishLoop() {
       for (auto& m : msg.markers) m.header.stamp = stamp;
       for (int c = 0; c < static_cast<int>(contacts.size()); ++c) {
         const bool active = have_contacts && contacts[c].normal_force > options_.contact_threshold;
-        conv::AppendContactMarkers(c, contacts[c], active, params_.world_frame, params_.force_marker_scale, &msg);
+        conv::AppendContactMarkers(c, contacts[c], active, params_.world_frame, params_.force_marker_scale,
+                                   params_.contact_marker_size, &msg);
       }
       markers_pub_.publish(msg);
     }

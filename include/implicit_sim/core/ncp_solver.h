@@ -14,7 +14,7 @@
 namespace implicit_sim {
 
 struct NewtonOptions {
-  double tolerance = 1e-12;       // converged when |Phi|_2 <= tolerance (rows are scaled to O(1))
+  double tolerance = 1e-12;       // converged when |Phi|_2 <= tolerance (1 + |z|_inf) (rows are scaled to O(1))
   int max_iterations = 100;
   double lm_damping = 1e-12;      // LM damping = lm_damping * max(1, 0.5 |Phi|^2)
   double armijo = 1e-4;           // sufficient decrease factor

@@ -84,6 +84,12 @@ class StepProblem {
   const std::vector<Vec3>& tangent_axes() const { return tangent_axis_; }
   void set_tangent_axes(const std::vector<Vec3>& axes) { tangent_axis_ = axes; }
 
+  // Warm-start predictor: translates the closest points of *z with their bodies over the step (a += h v0; not as
+  // material points: a rolling sphere's contact point moves with its centre) and sets d = n . (a1 - a2), so that a
+  // fast body's warm start stays near the new solution instead of a spurious one (the far sides of two spheres also
+  // satisfy the normal cones).
+  void PredictClosestPoints(Eigen::VectorXd* z) const;
+
   // Cold-start friction guess from the start-of-step relative velocity at the points in *z: sigma = the generalized
   // slip speed and s = the sliding direction (sigma = 0, s = 0 is a saddle of the merit function for a sliding or
   // separated contact).

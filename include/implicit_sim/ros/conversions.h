@@ -42,9 +42,11 @@ implicit_sim::ContactState ToContactMsg(const Model& model, int pair, const Cont
 visualization_msgs::MarkerArray ShapeMarkers(const Model& model);
 
 // Contact markers for pair `pair` in the world frame: the point a1, the normal at a2, and the contact force at a1 as an
-// arrow of length |F| * force_scale (m/N). With active = false, DELETE actions for the same ids.
+// arrow of length |F| * force_scale (m/N); `size` (m) is the point's diameter. With active = false, DELETE actions
+// for the same ids.
 void AppendContactMarkers(int pair, const ContactResult& contact, bool active,
-                          const std::string& world_frame, double force_scale, visualization_msgs::MarkerArray* out);
+                          const std::string& world_frame, double force_scale, double size,
+                          visualization_msgs::MarkerArray* out);
 
 }  // namespace ros_conversions
 }  // namespace implicit_sim

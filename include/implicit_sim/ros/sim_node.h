@@ -36,7 +36,8 @@ struct NodeParams {
   double real_time_factor = 1.0;  // [0, 1000]; 0 = as fast as possible
   bool paused = false;
   std::string world_frame = "world";
-  double force_marker_scale = 0.05;  // m/N, (0, 100]
+  double force_marker_scale = 0.05;  // m/N, (0, 100]: length of a contact force arrow per newton
+  double contact_marker_size = 0.05;  // m, (0, 100]: diameter of a contact point (arrows scale with it)
   // Reads and validates; throws std::invalid_argument naming the parameter and its range.
   static NodeParams Read(const ros::NodeHandle& pnh);
 };
