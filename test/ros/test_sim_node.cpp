@@ -5,6 +5,8 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include <diagnostic_msgs/DiagnosticArray.h>
@@ -300,6 +302,24 @@ TEST(SimNode, ABadParameterOrSceneStopsTheNodeAtStartup) {
   out = RunCommand(std::string("timeout 30 ") + IMPLICIT_SIM_NODE + " __name:=bad_scene _scene:=no_such_scene", &code);
   EXPECT_EQ(code, 1) << out;
   EXPECT_NE(out.find("~scene"), std::string::npos) << out;
+}
+
+TEST(SimNode, ReadsTheSceneFromRobotDescriptionWhenNoSceneIsGiven) {
+  std::ifstream file(std::string(IMPLICIT_SIM_SOURCE_DIR) + "/scenes/p2_sphere_spinning.urdf");
+  std::stringstream xml;
+  xml << file.rdbuf();
+  ros::param::set("/described/robot_description", xml.str());
+  int code = 0;
+  // Runs until timeout's SIGINT after 4 s (timeout then exits 124); a missing or bad scene would exit 1 at once.
+  const std::string out = RunCommand(std::string("timeout -s INT 4 ") + IMPLICIT_SIM_NODE +
+                                         " __ns:=/described __name:=from_description _paused:=true",
+                                     &code);
+  EXPECT_EQ(code, 124) << out;
+  ros::param::del("/described/robot_description");
+  const std::string missing = RunCommand(
+      std::string("timeout 30 ") + IMPLICIT_SIM_NODE + " __ns:=/described __name:=no_description", &code);
+  EXPECT_EQ(code, 1) << missing;
+  EXPECT_NE(missing.find("robot_description"), std::string::npos) << missing;
 }
 
 TEST(SimNode, ABagRecordedWhileRunningHoldsEveryTopic) {
