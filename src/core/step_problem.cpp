@@ -410,29 +410,30 @@ double StepProblem::ComplementarityError(const Eigen::VectorXd& z) {
   return worst;
 }
 
-ContactResult StepProblem::Contact(int c, const Eigen::VectorXd& z) {
+void StepProblem::Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>* contacts) {
   UpdateBodies(z);
-  const ContactPair& pair = model_.pairs[c];
-  const PairBlock& blk = blocks_[c];
-  const int off = blk.offset;
-  ContactResult out;
-  out.p_WA1 = z.segment<3>(off + pi::kA1);
-  out.p_WA2 = z.segment<3>(off + pi::kA2);
-  out.n_W = z.segment<3>(off + pi::kN);
-  out.gap = z[off + pi::kD];
-  out.normal_force = z[blk.ln()];
-  Vec3 t, o;
-  Mat3 dt_dn, do_dn;
-  TangentBasis(out.n_W, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
-  const FrictionParams& fr = pair.friction;
-  const double mu_ln = fr.mu * out.normal_force;
-  out.friction_force_W = mu_ln * (fr.e_t * z[off + pi::kSt] * t + fr.e_o * z[off + pi::kSo] * o);
-  out.torsional_moment = mu_ln * fr.e_r * z[off + pi::kSr];
-  const BodyEnd& e1 = end_[pair.body1];
-  const BodyEnd& e2 = end_[pair.body2];
-  const Vec3 v_rel = (e1.v + e1.w.cross(out.p_WA1 - e1.p)) - (e2.v + e2.w.cross(out.p_WA2 - e2.p));
-  out.slip_speed = (v_rel - v_rel.dot(out.n_W) * out.n_W).norm();
-  return out;
+  for (size_t c = 0; c < blocks_.size(); ++c) {
+    const ContactPair& pair = model_.pairs[c];
+    const PairBlock& blk = blocks_[c];
+    const int off = blk.offset;
+    ContactResult& out = (*contacts)[c];
+    out.p_WA1 = z.segment<3>(off + pi::kA1);
+    out.p_WA2 = z.segment<3>(off + pi::kA2);
+    out.n_W = z.segment<3>(off + pi::kN);
+    out.gap = z[off + pi::kD];
+    out.normal_force = z[blk.ln()];
+    Vec3 t, o;
+    Mat3 dt_dn, do_dn;
+    TangentBasis(out.n_W, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
+    const FrictionParams& fr = pair.friction;
+    const double mu_ln = fr.mu * out.normal_force;
+    out.friction_force_W = mu_ln * (fr.e_t * z[off + pi::kSt] * t + fr.e_o * z[off + pi::kSo] * o);
+    out.torsional_moment = mu_ln * fr.e_r * z[off + pi::kSr];
+    const BodyEnd& e1 = end_[pair.body1];
+    const BodyEnd& e2 = end_[pair.body2];
+    const Vec3 v_rel = (e1.v + e1.w.cross(out.p_WA1 - e1.p)) - (e2.v + e2.w.cross(out.p_WA2 - e2.p));
+    out.slip_speed = (v_rel - v_rel.dot(out.n_W) * out.n_W).norm();
+  }
 }
 
 }  // namespace implicit_sim

@@ -66,8 +66,8 @@ void WriteState(const Model& model, const StepProblem& problem, const Eigen::Vec
   state->t += h;
 }
 
-}  // namespace
-
+// Fills the contact block of pair c in z from closest points computed at the configuration `state` by the distance
+// oracle (cold start), with multipliers consistent with the normal and a normal force guess.
 void SeedPair(const Model& model, const State& state, int c, const StepProblem& problem, Eigen::VectorXd* z) {
   const ContactPair& pair = model.pairs[c];
   const PairBlock& blk = problem.blocks()[c];
@@ -94,8 +94,6 @@ void SeedPair(const Model& model, const State& state, int c, const StepProblem& 
   (*z)[blk.beta() + k2] = 1.0 / grad2;
   (*z)[blk.ln()] = cp.distance < 1e-6 ? 0.5 * problem.force_scale() : 0.0;
 }
-
-namespace {
 
 // One solve of the step NCP of length h from `state`: warm start if there is one, and a cold start (closest points
 // from the distance oracle) if that fails. Leaves the better solution in data->z; does not touch the state.
@@ -181,7 +179,7 @@ bool Advance(const Model& model, const StepperOptions& options, double h, int de
   report->converged = report->converged && result.converged;
   report->residual = std::max(report->residual, result.residual);
   report->complementarity_error = std::max(report->complementarity_error, problem.ComplementarityError(data->z));
-  for (int c = 0; c < static_cast<int>(model.pairs.size()); ++c) data->contacts[c] = problem.Contact(c, data->z);
+  problem.Contacts(data->z, &data->contacts);
   WriteState(model, problem, data->z, h, state);
   data->has_warm_start = true;
   return true;

@@ -101,7 +101,8 @@ class StepProblem {
   // The largest |min(a, b)| over all complementarity pairs (in their scaled units).
   double ComplementarityError(const Eigen::VectorXd& z);
 
-  ContactResult Contact(int pair, const Eigen::VectorXd& z);
+  // The contact quantities of every pair for a solution z (one entry per model pair).
+  void Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>* out);
 
   // End-of-step pose of body b for velocities in z.
   Pose EndPose(int body, const Eigen::VectorXd& z) const;

@@ -63,8 +63,4 @@ class Data {
 StepReport Step(const Model& model, const StepperOptions& options, State* state, Data* data,
                 const Eigen::VectorXd* external_wrench_W = nullptr);
 
-// Fills the contact block of pair c in z from closest points computed at the configuration `state` by the distance
-// oracle (cold start), with multipliers consistent with the normal and zero forces except a normal force guess.
-void SeedPair(const Model& model, const State& state, int c, const StepProblem& problem, Eigen::VectorXd* z);
-
 }  // namespace implicit_sim
