@@ -38,7 +38,8 @@ NewtonResult SemismoothNewton::Solve(StepProblem* problem, const NewtonOptions& 
       return result;
     }
     // Levenberg-Marquardt direction: (J^T J + lambda I) dz = -J^T Phi.
-    normal_.noalias() = J_.transpose() * J_;
+    normal_.setZero();
+    normal_.selfadjointView<Eigen::Lower>().rankUpdate(J_.transpose());  // lower triangle of J^T J: half the work
     normal_.diagonal().array() += options.lm_damping * std::max(1.0, merit);
     rhs_.noalias() = -J_.transpose() * Phi_;
     ldlt_.compute(normal_);
