@@ -1,0 +1,61 @@
+// The retry ladder under injected solver failures (an iteration limit of 1, an impossible tolerance): every rung is
+// counted, a failure is reported rather than thrown, and the state never becomes NaN.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "scenario_runner.h"
+
+namespace implicit_sim {
+namespace {
+
+struct Warm {
+  Model model = LoadSceneFromFile(testing_support::ScenePath("p3_sphere_on_two_spheres.urdf"));
+  Data data{model};
+  State state = State::Initial(model);
+  Warm() { EXPECT_TRUE(Step(model, StepperOptions(), &state, &data).converged); }  // a good warm start first
+};
+
+TEST(FailureLadder, WhenEveryRungFailsEachIsCountedAndTheBestFiniteIterateIsKept) {
+  Warm w;
+  StepperOptions options;
+  options.newton.max_iterations = 1;
+  options.newton.tolerance = 1e-300;  // below what double precision can reach
+  const StepReport report = Step(w.model, options, &w.state, &w.data);
+  EXPECT_EQ(report.cold_restarts, 1 + 2 + 4 + 8 + 16);    // every (sub-)step: warm fails, cold fails,
+  EXPECT_EQ(report.smoothed_solves, 1 + 2 + 4 + 8 + 16);  // the continuation fails,
+  EXPECT_EQ(report.substeps, 1 + 2 + 4 + 8);              // and it splits down to h / 16
+  EXPECT_FALSE(report.converged);
+  EXPECT_TRUE(report.advanced);
+  EXPECT_NEAR(w.state.t, 0.02, 1e-15);
+  EXPECT_TRUE(w.state.q.allFinite());
+  EXPECT_TRUE(w.state.v.allFinite());
+  EXPECT_TRUE(std::isfinite(report.residual));
+  EXPECT_TRUE(Step(w.model, StepperOptions(), &w.state, &w.data).converged);  // normal settings recover
+}
+
+TEST(FailureLadder, AnIterationLimitOfOneIsRescuedByTheLadder) {
+  Warm w;
+  StepperOptions options;
+  options.newton.max_iterations = 1;
+  const StepReport report = Step(w.model, options, &w.state, &w.data);
+  EXPECT_TRUE(report.converged);
+  EXPECT_GE(report.cold_restarts, 1);
+  EXPECT_GE(report.smoothed_solves + report.substeps, 1);
+}
+
+TEST(FailureLadder, AnImpossibleToleranceIsReportedAsNotConvergedWithTheRightPhysics) {
+  const Model model = LoadSceneFromFile(testing_support::ScenePath("p2_sphere_spinning.urdf"));
+  Data data(model);
+  State state = State::Initial(model);
+  StepperOptions options;
+  options.newton.tolerance = 1e-300;
+  const StepReport report = Step(model, options, &state, &data);
+  EXPECT_FALSE(report.converged);
+  EXPECT_TRUE(report.advanced);
+  EXPECT_LT(report.residual, 1e-6);  // the accepted iterate is still a good one
+  EXPECT_NEAR(state.v[5], 1.962 - 0.01 * 1.962, 1e-6);
+}
+
+}  // namespace
+}  // namespace implicit_sim
