@@ -5,7 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "implicit_sim/core/distance_oracle.h"
+#include "implicit_sim/core/support.h"
 
 namespace implicit_sim {
 
@@ -75,7 +75,7 @@ void TrajectoryWriter::WriteInitial(const State& state) {
   WriteBodies(state);
   for (const ContactPair& pair : model_.pairs) {
     const ClosestPointsResult cp =
-        ComputeClosestPoints(model_.bodies[pair.body1].shape, state.X_WB(model_, pair.body1),
+        FindClosestPoints(model_.bodies[pair.body1].shape, state.X_WB(model_, pair.body1),
                              model_.bodies[pair.body2].shape, state.X_WB(model_, pair.body2));
     out_ << ',' << FormatNumber(cp.solved ? cp.distance : std::nan("")) << ",nan,nan,nan,nan";
   }

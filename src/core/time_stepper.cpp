@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "implicit_sim/core/distance_oracle.h"
+#include "implicit_sim/core/support.h"
 
 namespace implicit_sim {
 namespace pi = pair_index;
@@ -66,15 +66,15 @@ void WriteState(const Model& model, const StepProblem& problem, const Eigen::Vec
   state->t += h;
 }
 
-// Fills the contact block of pair c in z from closest points computed at the configuration `state` by the distance
-// oracle (cold start), with multipliers consistent with the normal and a normal force guess.
+// Fills the contact block of pair c in z from closest points at the configuration `state` (closed form, or the
+// distance oracle) for a cold start, with multipliers consistent with the normal and a normal force guess.
 void SeedPair(const Model& model, const State& state, int c, const StepProblem& problem, Eigen::VectorXd* z) {
   const ContactPair& pair = model.pairs[c];
   const PairBlock& blk = problem.blocks()[c];
   const Body& body1 = model.bodies[pair.body1];
   const Body& body2 = model.bodies[pair.body2];
   const Pose X_WB1 = state.X_WB(model, pair.body1), X_WB2 = state.X_WB(model, pair.body2);
-  const ClosestPointsResult cp = ComputeClosestPoints(body1.shape, X_WB1, body2.shape, X_WB2);
+  const ClosestPointsResult cp = FindClosestPoints(body1.shape, X_WB1, body2.shape, X_WB2);
   Vec3 p1 = cp.p_W1, p2 = cp.p_W2;
   if (!cp.solved || !p1.allFinite() || !p2.allFinite()) {  // fall back to the body origins
     p1 = X_WB1.translation();
@@ -84,7 +84,7 @@ void SeedPair(const Model& model, const State& state, int c, const StepProblem& 
   double grad2 = 1.0, grad1 = 1.0;
   const int k2 = MostActiveInequality(body2.shape, X_WB2, p2, &n, &grad2);
   const int k1 = MostActiveInequality(body1.shape, X_WB1, p1, &normal1, &grad1);
-  if ((p1 - p2).norm() > 1e-9) n = (p1 - p2).normalized();
+  if (cp.distance > 1e-9) n = (p1 - p2).normalized();  // separated: along the closest points
   z->segment(blk.offset, blk.size()).setZero();
   z->segment<3>(blk.offset + pi::kA1) = p1;
   z->segment<3>(blk.offset + pi::kA2) = p2;

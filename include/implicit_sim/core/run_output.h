@@ -37,7 +37,7 @@ class TrajectoryWriter {
  public:
   // Throws std::runtime_error if the file cannot be written.
   TrajectoryWriter(const std::string& path, const Model& model);
-  // The t = 0 row: gaps from the distance oracle, forces and slip unknown (written as nan).
+  // The t = 0 row: gaps from FindClosestPoints (closed form, or the distance oracle), forces and slip unknown (nan).
   void WriteInitial(const State& state);
   void WriteStep(const State& state, const Data& data, const StepReport& report);
 
