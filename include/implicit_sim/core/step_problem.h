@@ -14,7 +14,8 @@
 //     ln                 normal force (N)
 //     sigma              slip multiplier (m/s): the generalized slip speed at a sliding contact
 // Equations (rows), scaled so that each is O(1) with the force scale Fs of the model:
-//   body rows     M (nu - nu0)/h - f_app - f_gyro - sum W lambda = 0, divided by Fs (paper eq. 1, impulse form / h)
+//   body rows     m (v - v0)/h - f_app - sum W lambda = 0 and (I_W(R1) w - I_W(R0) w0)/h - tau_app - sum ... = 0,
+//                 divided by Fs (paper eq. 1 in impulse form / h; the angular row in momentum form, see AddBodyRows)
 //   pair rows     a1 - a2 - d n = 0;  n - sum beta grad g = 0;  -n - sum alpha grad f = 0;  (n.n - 1)/2 = 0
 //                 friction (paper eq. 10 with its typo fixed, divided by mu e ln so that it stays regular at ln = 0):
 //                   e_t (t.v_rel) + s_t sigma = 0,  e_o (o.v_rel) + s_o sigma = 0,  e_r (n.w_rel) + s_r sigma = 0
@@ -71,7 +72,7 @@ class StepProblem {
   int size() const { return size_; }
   const std::vector<PairBlock>& blocks() const { return blocks_; }
 
-  // Stores the start-of-step quantities (poses, velocities, inertia, gyroscopic terms) and the external wrenches
+  // Stores the start-of-step quantities (poses, velocities, world inertia) and the external wrenches
   // of the step: 6 values per moving body slot (force N, torque N m; world frame, at the centre of mass), or null.
   void BeginStep(const Model& model, const State& start, double h, const Eigen::VectorXd* external_wrench_W);
 
@@ -117,7 +118,6 @@ class StepProblem {
     Mat3 R0 = Mat3::Identity();
     Vec3 v0 = Vec3::Zero(), w0 = Vec3::Zero();
     Mat3 I_W0 = Mat3::Zero();       // world inertia at the start of the step (kg m^2)
-    Vec3 gyro_W = Vec3::Zero();     // w0 x I_W0 w0 (explicit gyroscopic term, N m)
   };
   struct BodyEnd {    // per body, for the current iterate
     Vec3 p = Vec3::Zero();
