@@ -24,6 +24,7 @@ void RunSummary::Add(const StepReport& report, const Data& data) {
   cold_restarts += report.cold_restarts;
   substeps += report.substeps;
   smoothed_solves += report.smoothed_solves;
+  ipopt_solves += report.ipopt_solves;
   max_iterations = std::max(max_iterations, report.iterations);
   max_residual = std::max(max_residual, report.residual);
   for (const ContactResult& contact : data.contacts) max_penetration = std::max(max_penetration, -contact.gap);
@@ -41,6 +42,7 @@ std::string RunSummary::ToJson() const {
   json += "  \"nonconverged_steps\": " + std::to_string(nonconverged_steps) + ",\n";
   json += "  \"cold_restarts\": " + std::to_string(cold_restarts) + ",\n";
   json += "  \"smoothed_solves\": " + std::to_string(smoothed_solves) + ",\n";
+  json += "  \"ipopt_solves\": " + std::to_string(ipopt_solves) + ",\n";
   json += "  \"substeps\": " + std::to_string(substeps) + ",\n";
   json += "  \"max_iterations\": " + std::to_string(max_iterations) + ",\n";
   json += "  \"max_residual\": " + FormatNumber(max_residual) + ",\n";

@@ -14,9 +14,11 @@ namespace {
 struct FB {
   double value, da, db;
 };
+// With raw = true, b and its derivative instead (see StepProblem::set_raw_complementarity).
 // With smoothing mu > 0: a + b - sqrt(a^2 + b^2 + 2 mu^2), smooth everywhere, whose root set a, b > 0, a b = mu^2
 // tends to the complementarity set as mu -> 0 (smoothing continuation, Chen-Harker-Kanzow-Smale).
-FB FischerBurmeister(double a, double b, double mu) {
+FB FischerBurmeister(double a, double b, double mu, bool raw) {
+  if (raw) return {b, 0.0, 1.0};  // the complementarity function b itself (for the Ipopt formulation)
   const double r = std::sqrt(a * a + b * b + 2.0 * mu * mu);
   if (r < 1e-14) return {a + b - r, 1.0 - 1.0 / std::sqrt(2.0), 1.0 - 1.0 / std::sqrt(2.0)};
   return {a + b - r, 1.0 - a / r, 1.0 - b / r};
@@ -58,6 +60,16 @@ StepProblem::StepProblem(const Model& model)
   for (size_t b = 0; b < model.bodies.size(); ++b) {
     end_[b].col = model.velocity_slot[b] < 0 ? -1 : 6 * model.velocity_slot[b];
   }
+  complementarity_kind_.assign(size_, 0);
+  for (const PairBlock& blk : blocks_) {
+    for (int i = blk.offset + pi::kAlpha; i < blk.offset + blk.size(); ++i) complementarity_kind_[i] = 1;
+    complementarity_kind_[blk.ln()] = 2;  // the normal force enters as ln / Fs
+  }
+}
+
+bool StepProblem::IsComplementarityRow(int row, double* scale) const {
+  *scale = complementarity_kind_[row] == 2 ? 1.0 / force_scale_ : 1.0;
+  return complementarity_kind_[row] != 0;
 }
 
 void StepProblem::BeginStep(const Model& model, const State& start, double h,
@@ -302,7 +314,7 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi,
       Phi->segment<3>(side.rows) -= mult * ev.g;
       add(side.rows, side.mult_col + k, -ev.g);
       add(side.rows, side.a_col, -mult * ev.H);
-      const FB fb = FischerBurmeister(mult, -ev.f, smoothing_);
+      const FB fb = FischerBurmeister(mult, -ev.f, smoothing_, raw_);
       const int fb_row = side.mult_col + k;
       (*Phi)[fb_row] = fb.value;
       add1(fb_row, side.mult_col + k, fb.da);
@@ -363,13 +375,13 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi,
 
   // Non-penetration (paper eq. 11 with the signed distance d as gap): ln / Fs _|_ d.
   const double Fs = force_scale_;
-  const FB fb_n = FischerBurmeister(ln / Fs, d, smoothing_);
+  const FB fb_n = FischerBurmeister(ln / Fs, d, smoothing_, raw_);
   (*Phi)[blk.ln()] = fb_n.value;
   add1(blk.ln(), blk.ln(), fb_n.da / Fs);
   add1(blk.ln(), off + pi::kD, fb_n.db);
 
   // Friction ellipsoid (paper eq. 5 divided by (mu ln)^2): sigma _|_ 1 - s_t^2 - s_o^2 - s_r^2.
-  const FB fb_s = FischerBurmeister(sigma, 1.0 - st * st - so * so - sr * sr, smoothing_);
+  const FB fb_s = FischerBurmeister(sigma, 1.0 - st * st - so * so - sr * sr, smoothing_, raw_);
   (*Phi)[blk.sigma()] = fb_s.value;
   add1(blk.sigma(), blk.sigma(), fb_s.da);
   add1(blk.sigma(), off + pi::kSt, -2.0 * fb_s.db * st);

@@ -4,12 +4,17 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "implicit_sim/core/ipopt_ncp.h"
 #include "implicit_sim/core/support.h"
 
 namespace implicit_sim {
 namespace pi = pair_index;
 
 bool StepperOptions::IsValid(std::string* error) const {
+  if (ipopt_max_iterations < 1 || ipopt_max_iterations > 100000) {
+    *error = "ipopt_max_iterations must be in [1, 100000], got " + std::to_string(ipopt_max_iterations);
+    return false;
+  }
   if (!(h > 0.0 && h <= 1.0)) {
     *error = "time step h must be in (0, 1] s, got " + std::to_string(h);
     return false;
@@ -26,7 +31,7 @@ Data::Data(const Model& model)
       solver(problem.size()),
       z(Eigen::VectorXd::Zero(problem.size())),
       z_start(Eigen::VectorXd::Zero(problem.size())),
-      z_warm_failed(Eigen::VectorXd::Zero(problem.size())),
+      z_best(Eigen::VectorXd::Zero(problem.size())),
       z_backup(kMaxSubstepDepth + 1, Eigen::VectorXd::Zero(problem.size())),
       contacts(model.pairs.size()) {}
 
@@ -95,8 +100,9 @@ void SeedPair(const Model& model, const State& state, int c, const StepProblem& 
   (*z)[blk.ln()] = cp.distance < 1e-6 ? 0.5 * problem.force_scale() : 0.0;
 }
 
-// One solve of the step NCP of length h from `state`: warm start if there is one, and a cold start (closest points
-// from the distance oracle) if that fails. Leaves the better solution in data->z; does not touch the state.
+// One solve of the step NCP of length h from `state`, climbing the ladder while it fails: warm start, cold start
+// (closed-form or oracle closest points), smoothing continuation, Ipopt then a Newton polish. Leaves the best
+// solution in data->z; does not touch the state. With the Ipopt solver: warm start, then cold start, both by Ipopt.
 NewtonResult SolveStep(const Model& model, const StepperOptions& options, double h, const State& state,
                        const Eigen::VectorXd* wrench, Data* data, StepReport* report) {
   StepProblem& problem = data->problem;
@@ -109,6 +115,16 @@ NewtonResult SolveStep(const Model& model, const StepperOptions& options, double
   };
   auto solve_from_start = [&]() {
     data->z = data->z_start;
+    if (options.solver == StepperOptions::Solver::kIpopt) {
+      report->ipopt_solves++;
+      const IpoptNcpResult r = SolveStepWithIpopt(&problem, options.ipopt_max_iterations, &data->z);
+      report->iterations += r.iterations;
+      NewtonResult result;
+      result.iterations = r.iterations;
+      result.residual = std::max(r.equation_residual, r.complementarity);
+      result.converged = r.solved && result.residual <= StepperOptions::kIpoptTolerance;
+      return result;
+    }
     const NewtonResult result = data->solver.Solve(&problem, options.newton, &data->z);
     report->iterations += result.iterations;
     return result;
@@ -124,35 +140,54 @@ NewtonResult SolveStep(const Model& model, const StepperOptions& options, double
   const NewtonResult warm = solve_from_start();
   if (warm.converged) return warm;
   report->cold_restarts++;
-  data->z_warm_failed = data->z;
+  data->z_best = data->z;
   data->axes_warm_failed = problem.tangent_axes();
   cold_guess();
   const NewtonResult cold = solve_from_start();
-  if (cold.converged) return cold;
+  if (cold.converged || options.solver == StepperOptions::Solver::kIpopt) return cold;
+  // Keep the better attempt in z_best (and its tangent axes); the next rungs start from it.
+  NewtonResult best = cold;
   if (!(cold.residual < warm.residual) && std::isfinite(warm.residual)) {
-    data->z = data->z_warm_failed;  // continue from the better of the two attempts
+    best = warm;
     problem.set_tangent_axes(data->axes_warm_failed);
+  } else {
+    data->z_best = data->z;
   }
+  data->z_start = data->z_best;
+  auto keep_if_better = [&](const NewtonResult& r) {
+    if (r.residual < best.residual || !std::isfinite(best.residual)) {
+      best = r;
+      data->z_best = data->z;
+    }
+  };
   // Smoothing continuation: solve with FB smoothed by mu = 1e-2, 1e-3, ... and then exactly, each from the last.
   report->smoothed_solves++;
-  data->z_start = data->z;
   NewtonResult result;
-  for (double mu = 1e-2; mu > 1e-9; mu *= 0.1) {
+  for (double mu = 1e-2; mu > 1e-9 && data->z.allFinite(); mu *= 0.1) {
     problem.set_smoothing(mu);
     result = data->solver.Solve(&problem, options.newton, &data->z);
     report->iterations += result.iterations;
-    if (!std::isfinite(result.residual)) break;
   }
   problem.set_smoothing(0.0);
   if (data->z.allFinite()) {
     result = data->solver.Solve(&problem, options.newton, &data->z);
     report->iterations += result.iterations;
+    if (result.converged) return result;
+    keep_if_better(result);
   }
-  if (result.converged) return result;
-  const double best = std::min(warm.residual, cold.residual);
-  if (result.residual < best || !std::isfinite(best)) return result;
-  data->z = data->z_start;  // the continuation did not help
-  return best == cold.residual ? cold : warm;
+  // The other solver: Ipopt on the complementarity-penalty NLP from the same start, polished by Newton.
+  report->ipopt_solves++;
+  data->z = data->z_start;
+  const IpoptNcpResult ipopt = SolveStepWithIpopt(&problem, options.ipopt_max_iterations, &data->z);
+  report->iterations += ipopt.iterations;
+  if (data->z.allFinite()) {
+    result = data->solver.Solve(&problem, options.newton, &data->z);
+    report->iterations += result.iterations;
+    if (result.converged) return result;
+    keep_if_better(result);
+  }
+  data->z = data->z_best;
+  return best;
 }
 
 // Advances the state by h; when the solve fails, by two halves instead, down to h / 2^kMaxSubstepDepth, where the

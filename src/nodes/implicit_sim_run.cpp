@@ -15,12 +15,14 @@
 namespace {
 
 constexpr const char* kUsage =
-    "usage: implicit_sim_run --scene FILE --duration T --dt H --out DIR [--tolerance TOL] [--max-iterations N]";
+    "usage: implicit_sim_run --scene FILE --duration T --dt H --out DIR [--tolerance TOL] [--max-iterations N] "
+    "[--solver newton|ipopt]";
 
 struct Args {
   std::string scene, out;
   double duration = 0.0, dt = 0.01;
   implicit_sim::NewtonOptions newton;
+  implicit_sim::StepperOptions::Solver solver = implicit_sim::StepperOptions::Solver::kNewton;
 };
 
 double ParsePositive(const std::string& flag, const std::string& text) {
@@ -41,7 +43,7 @@ Args ParseArgs(int argc, char** argv) {
       std::exit(0);
     }
     if (flag != "--scene" && flag != "--duration" && flag != "--dt" && flag != "--out" && flag != "--tolerance" &&
-        flag != "--max-iterations") {
+        flag != "--max-iterations" && flag != "--solver") {
       throw std::invalid_argument("unknown flag '" + flag + "' (" + kUsage + ")");
     }
     if (i + 1 >= argc) throw std::invalid_argument(flag + " needs a value");
@@ -61,6 +63,14 @@ Args ParseArgs(int argc, char** argv) {
     if (n != std::floor(n) || n > 100000) throw std::invalid_argument("--max-iterations must be an integer in [1, 100000]");
     args.newton.max_iterations = static_cast<int>(n);
   }
+  if (values.count("--solver")) {
+    const std::string& solver = values["--solver"];
+    if (solver != "newton" && solver != "ipopt") {
+      throw std::invalid_argument("--solver must be newton or ipopt, got '" + solver + "'");
+    }
+    args.solver = solver == "ipopt" ? implicit_sim::StepperOptions::Solver::kIpopt
+                                    : implicit_sim::StepperOptions::Solver::kNewton;
+  }
   if (args.duration / args.dt > 1e8) throw std::invalid_argument("--duration / --dt exceeds 1e8 steps");
   return args;
 }
@@ -76,6 +86,7 @@ int main(int argc, char** argv) {
     args = ParseArgs(argc, argv);
     options.h = args.dt;
     options.newton = args.newton;
+    options.solver = args.solver;
     std::string error;
     if (!options.IsValid(&error)) throw std::invalid_argument(error);
     model = LoadSceneFromFile(args.scene);

@@ -63,6 +63,10 @@ NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
   p.time_step = ReadParam(pnh, "time_step", p.time_step);
   p.tolerance = ReadParam(pnh, "tolerance", p.tolerance);
   p.max_iterations = ReadParam(pnh, "max_iterations", p.max_iterations);
+  p.solver = ReadParam(pnh, "solver", p.solver);
+  if (p.solver != "newton" && p.solver != "ipopt") {
+    throw std::invalid_argument("parameter ~solver = '" + p.solver + "' must be newton or ipopt");
+  }
   p.publish_rate = ReadParam(pnh, "publish_rate", p.publish_rate);
   p.real_time_factor = ReadParam(pnh, "real_time_factor", p.real_time_factor);
   p.paused = ReadParam(pnh, "paused", p.paused);
@@ -90,6 +94,7 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   options_.h = params_.time_step;
   options_.newton.tolerance = params_.tolerance;
   options_.newton.max_iterations = params_.max_iterations;
+  options_.solver = params_.solver == "ipopt" ? StepperOptions::Solver::kIpopt : StepperOptions::Solver::kNewton;
   std::string error;
   if (!options_.IsValid(&error)) throw std::invalid_argument(error);
   state_ = initial_state_ = backup_ = State::Initial(model_);

@@ -24,6 +24,7 @@ TEST(FailureLadder, WhenEveryRungFailsEachIsCountedAndTheBestFiniteIterateIsKept
   const StepReport report = Step(w.model, options, &w.state, &w.data);
   EXPECT_EQ(report.cold_restarts, 1 + 2 + 4 + 8 + 16);    // every (sub-)step: warm fails, cold fails,
   EXPECT_EQ(report.smoothed_solves, 1 + 2 + 4 + 8 + 16);  // the continuation fails,
+  EXPECT_EQ(report.ipopt_solves, 1 + 2 + 4 + 8 + 16);     // Ipopt and its polish fail,
   EXPECT_EQ(report.substeps, 1 + 2 + 4 + 8);              // and it splits down to h / 16
   EXPECT_FALSE(report.converged);
   EXPECT_TRUE(report.advanced);

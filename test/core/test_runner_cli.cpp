@@ -67,6 +67,7 @@ TEST(RunnerCli, RefusesBadArgumentsAndWritesNothing) {
   EXPECT_EQ(RunRunner("--scene " + scene + " --duration 1 --dt abc --out " + out), 2);
   EXPECT_EQ(RunRunner("--scene " + scene + " --duration 1"), 2);
   EXPECT_EQ(RunRunner("--scene " + scene + " --duration 1 --out " + out + " --max-iterations 2.5"), 2);
+  EXPECT_EQ(RunRunner("--scene " + scene + " --duration 1 --out " + out + " --solver path"), 2);
   EXPECT_FALSE(Exists(out));
 }
 

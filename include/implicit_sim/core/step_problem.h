@@ -111,6 +111,12 @@ class StepProblem {
   double force_scale() const { return force_scale_; }
   // Smoothing mu >= 0 of every Fischer-Burmeister function (0: the exact problem). See FischerBurmeister.
   void set_smoothing(double mu) { smoothing_ = mu; }
+  // Raw mode: each complementarity row returns b(z), the function side of its pair (-f_i(a1), -g_j(a2), d, zeta),
+  // instead of FB(a, b). The variable side a is the unknown with the row's own index (scaled by 1/Fs for the
+  // normal force). The Ipopt formulation of the step (ipopt_ncp.h) uses it.
+  void set_raw_complementarity(bool raw) { raw_ = raw; }
+  // Whether row i is a complementarity row, and the scale of its variable side a = scale * z[i].
+  bool IsComplementarityRow(int row, double* scale) const;
 
  private:
   struct BodyStep {   // per body, for the current step
@@ -154,6 +160,8 @@ class StepProblem {
   double h_ = 0.0;
   double force_scale_ = 1.0;
   double smoothing_ = 0.0;
+  bool raw_ = false;
+  std::vector<char> complementarity_kind_;  // per row: 0 equation, 1 complementarity, 2 normal-force complementarity
 };
 
 }  // namespace implicit_sim

@@ -19,8 +19,12 @@
 namespace implicit_sim {
 
 struct StepperOptions {
+  enum class Solver { kNewton, kIpopt };
+  static constexpr double kIpoptTolerance = 1e-8;  // an Ipopt solve converged: equations and pairs within this
   double h = 0.01;                // time step (s), in (0, 1]
+  Solver solver = Solver::kNewton;  // the primary solver; Newton's retry ladder also tries Ipopt
   NewtonOptions newton;
+  int ipopt_max_iterations = 500; // [1, 100000]
   double contact_threshold = 1e-9;  // a pair counts as an active contact when its normal force exceeds this (N)
   bool IsValid(std::string* error) const;
 };
@@ -30,6 +34,7 @@ struct StepReport {
   bool advanced = false;        // the state was advanced (false only when no finite solution was found)
   int cold_restarts = 0;        // solves whose warm start failed and that were retried from a cold start
   int smoothed_solves = 0;      // solves that went on to a smoothing continuation after the cold start failed
+  int ipopt_solves = 0;         // Ipopt solves (the primary solver, or the ladder rung after the continuation)
   int substeps = 0;             // times a (sub-)step was split into two halves after its solve failed
   int iterations = 0;           // Newton iterations, all attempts
   double residual = 0.0;        // |Phi|_2 of the accepted solution (the largest over sub-steps)
@@ -48,7 +53,7 @@ class Data {
   Eigen::VectorXd z_start;      // the initial guess of the current step
   bool has_warm_start = false;
   // Workspace of the retry paths, allocated once.
-  Eigen::VectorXd z_warm_failed;
+  Eigen::VectorXd z_best;
   std::vector<Vec3> axes_warm_failed;
   std::vector<Eigen::VectorXd> z_backup;  // per sub-step depth
   std::vector<ContactResult> contacts;  // per pair, at the end of the last step

@@ -32,6 +32,7 @@ struct NodeParams {
   double time_step = 0.01;        // s, (0, 1]
   double tolerance = 1e-12;       // Newton tolerance on the scaled residual, (0, 0.1]
   int max_iterations = 100;       // [1, 100000]
+  std::string solver = "newton";  // newton or ipopt
   double publish_rate = 30.0;     // Hz, (0, 1000]: /tf, ~body_states, ~contacts, ~markers
   double real_time_factor = 1.0;  // [0, 1000]; 0 = as fast as possible
   bool paused = false;
