@@ -264,6 +264,7 @@ void SimNode::PublishStepStats(const StepReport& r, double sim_time, uint64_t st
   msg.active_contacts = r.active_contacts;
   msg.cold_restarts = r.cold_restarts;
   msg.smoothed_solves = r.smoothed_solves;
+  msg.ipopt_solves = r.ipopt_solves;
   msg.substeps = r.substeps;
   msg.wall_time = r.wall_time_s;
   msg.real_time_factor = rtf;
