@@ -3,6 +3,7 @@
 // determinism.
 #include "implicit_sim/core/time_stepper.h"
 #include "implicit_sim/core/distance_oracle.h"
+#include "implicit_sim/core/support.h"
 
 #include <cmath>
 #include <cstring>
@@ -250,6 +251,43 @@ TEST(TimeStepper, TumblingEllipsoidConservesAngularMomentumAndNeverGainsEnergy) 
   EXPECT_LT(max_L_error, 1e-10);
   EXPECT_LE(max_gain, 1e-12);
   EXPECT_LT(final_loss, 0.01);  // measured 0.57 % over 10 s at h = 1 ms
+}
+
+}  // namespace
+}  // namespace implicit_sim
+
+namespace implicit_sim {
+namespace {
+
+TEST(TimeStepper, RockingEllipsoidLosesEnergyLikeBackwardEulerAndNeverGainsAny) {
+  // An ellipsoid (0.2, 0.1, 0.06 m) tilted 0.2 rad about y rocks on the ground with angular frequency w of about
+  // 21 rad/s. Taking the geometry at the end of the step acts like backward Euler: about (h w)^2 of the rocking
+  // energy goes per step (DESIGN.md pitfall 7), so after 10 s at h = 1 ms about exp(-4.4) ~ 1 % is left.
+  Model m;
+  m.bodies.push_back(FixedBody("ground", MakeHalfSpace()));
+  Body egg = MovingBody("egg", MakeEllipsoid(Vec3(0.2, 0.1, 0.06)), 1.0, Pose::Identity());
+  egg.X_WB0.linear() = Eigen::AngleAxisd(0.2, Vec3::UnitY()).toRotationMatrix();
+  Vec3 lowest;
+  ASSERT_TRUE(SupportPoint(egg.shape, egg.X_WB0, -Vec3::UnitZ(), &lowest));
+  egg.X_WB0.translation() = Vec3(0, 0, -lowest.z());  // touching the ground
+  m.bodies.push_back(egg);
+  const Model model = test_models::Finish(m, FrictionParams{1.0, 1.0, 1.0, 0.01});
+  auto energy = [&](const State& s) { return KineticEnergy(model, s) + 9.81 * s.q[2]; };
+  const double rest = 9.81 * 0.06, E0 = energy(State::Initial(model));
+  double max_gain = 0.0, previous_wy = 0.0, kept = 0.0;
+  int half_periods = 0;
+  const auto stats = testing_support::RunScene(model, 0.001, 10.0,
+                                               [&](const Model&, const State& s, const Data&, const StepReport&) {
+    max_gain = std::max(max_gain, energy(s) - E0);
+    if (s.v[4] * previous_wy < 0.0) ++half_periods;
+    previous_wy = s.v[4];
+    kept = (energy(s) - rest) / (E0 - rest);
+  });
+  EXPECT_EQ(stats.nonconverged, 0);
+  EXPECT_LE(max_gain, 1e-9);
+  EXPECT_GE(half_periods, 40);      // it rocks (measured 65 sign changes of w_y)
+  EXPECT_GT(kept, 0.001);           // measured 0.9 % of the rocking energy left
+  EXPECT_LT(kept, 0.05);
 }
 
 }  // namespace
