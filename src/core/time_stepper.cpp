@@ -245,7 +245,6 @@ StepReport Step(const Model& model, const StepperOptions& options, State* state,
     if (contact.normal_force > options.contact_threshold) ++report.active_contacts;
   }
   report.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  data->report = report;
   return report;
 }
 

@@ -57,7 +57,6 @@ class Data {
   std::vector<Vec3> axes_warm_failed;
   std::vector<Eigen::VectorXd> z_backup;  // per sub-step depth
   std::vector<ContactResult> contacts;  // per pair, at the end of the last step
-  StepReport report;
 };
 
 // Advances *state by one step of options.h. `external_wrench_W`, if given, holds 6 values per moving body slot:
