@@ -150,18 +150,8 @@ IpoptNcpResult SolveStepWithIpopt(StepProblem* problem, int max_iterations, Eige
   } catch (const std::exception&) {
     result.solved = false;
   }
-  // Residuals of the returned point, measured on the raw equations and pairs.
-  Eigen::VectorXd raw;
-  problem->Evaluate(*z, &raw, nullptr);
   problem->set_raw_complementarity(false);
-  for (int i = 0; i < raw.size(); ++i) {
-    double scale;
-    if (problem->IsComplementarityRow(i, &scale)) {
-      result.complementarity = std::max(result.complementarity, std::abs(std::min(scale * (*z)[i], raw[i])));
-    } else {
-      result.equation_residual = std::max(result.equation_residual, std::abs(raw[i]));
-    }
-  }
+  problem->RawResiduals(*z, &result.equation_residual, &result.complementarity);
   if (!std::isfinite(result.equation_residual) || !std::isfinite(result.complementarity)) result.solved = false;
   return result;
 }

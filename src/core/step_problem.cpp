@@ -60,6 +60,7 @@ StepProblem::StepProblem(const Model& model)
   for (size_t b = 0; b < model.bodies.size(); ++b) {
     end_[b].col = model.velocity_slot[b] < 0 ? -1 : 6 * model.velocity_slot[b];
   }
+  raw_scratch_ = Eigen::VectorXd::Zero(size_);
   complementarity_kind_.assign(size_, 0);
   for (const PairBlock& blk : blocks_) {
     for (int i = blk.offset + pi::kAlpha; i < blk.offset + blk.size(); ++i) complementarity_kind_[i] = 1;
@@ -406,27 +407,26 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi,
   AddContactWrench(c, pair.body2, -1.0, r2, w, Phi, J);
 }
 
-double StepProblem::ComplementarityError(const Eigen::VectorXd& z) {
-  UpdateBodies(z);
-  double worst = 0.0;
-  for (size_t c = 0; c < blocks_.size(); ++c) {
-    const ContactPair& pair = model_.pairs[c];
-    const PairBlock& blk = blocks_[c];
-    const Vec3 a1 = z.segment<3>(blk.offset + pi::kA1), a2 = z.segment<3>(blk.offset + pi::kA2);
-    for (int k = 0; k < blk.k1; ++k) {
-      const double f = EvaluateInequality(pair.body1, k, a1).f;
-      worst = std::max(worst, std::abs(std::min(z[blk.offset + pi::kAlpha + k], -f)));
+void StepProblem::RawResiduals(const Eigen::VectorXd& z, double* equations, double* complementarity) {
+  const bool raw = raw_;
+  raw_ = true;  // complementarity rows give b(z); the variable side a is scale * z[i]
+  Evaluate(z, &raw_scratch_, nullptr);
+  raw_ = raw;
+  *equations = *complementarity = 0.0;
+  for (int i = 0; i < size_; ++i) {
+    double scale;
+    if (IsComplementarityRow(i, &scale)) {
+      *complementarity = std::max(*complementarity, std::abs(std::min(scale * z[i], raw_scratch_[i])));
+    } else {
+      *equations = std::max(*equations, std::abs(raw_scratch_[i]));
     }
-    for (int k = 0; k < blk.k2; ++k) {
-      const double g = EvaluateInequality(pair.body2, k, a2).f;
-      worst = std::max(worst, std::abs(std::min(z[blk.beta() + k], -g)));
-    }
-    const double ln = z[blk.ln()];
-    const double zeta = 1.0 - z.segment<3>(blk.offset + pi::kSt).squaredNorm();
-    worst = std::max(worst, std::abs(std::min(ln / force_scale_, z[blk.offset + pi::kD])));
-    worst = std::max(worst, std::abs(std::min(z[blk.sigma()], zeta)));
   }
-  return worst;
+}
+
+double StepProblem::ComplementarityError(const Eigen::VectorXd& z) {
+  double equations, complementarity;
+  RawResiduals(z, &equations, &complementarity);
+  return complementarity;
 }
 
 void StepProblem::Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>* contacts) {

@@ -1,10 +1,13 @@
 // Runs a scene from scenes/ headless for the scenario tests and hands every step end to a callback.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <string>
 
+#include "implicit_sim/core/distance_oracle.h"
 #include "implicit_sim/core/state.h"
 #include "implicit_sim/core/time_stepper.h"
 #include "implicit_sim/core/urdf_loader.h"
@@ -44,6 +47,35 @@ inline RunStats RunScene(const Model& model, double h, double duration, const St
   }
   stats.ke_final = KineticEnergy(model, state);
   return stats;
+}
+
+// Runs a two-body model (body 1 moving, body 0 fixed, one pair) and, at every step end where the pair is apart
+// (gap >= 1e-3 m), compares the stepper's closest points and gap with the distance oracle.
+struct OracleComparison {
+  double worst = 0.0;    // largest gap difference or closest-point distance to the oracle's (m)
+  double min_gap = 1.0;  // smallest gap seen (m)
+  int checks = 0;        // step ends compared
+  int nonconverged = 0;
+};
+
+inline OracleComparison CompareClosestPointsWithOracle(const Model& model, double h, double duration) {
+  OracleComparison out;
+  RunScene(model, h, duration, [&](const Model& m, const State& s, const Data& d, const StepReport& r) {
+    out.nonconverged += !r.converged;
+    const ContactResult& c = d.contacts[0];
+    out.min_gap = std::min(out.min_gap, c.gap);
+    if (c.gap < 1e-3) return;
+    const ClosestPointsResult cp =
+        ComputeClosestPoints(m.bodies[1].shape, s.X_WB(m, 1), m.bodies[0].shape, s.X_WB(m, 0));
+    if (!cp.solved) {
+      out.worst = std::numeric_limits<double>::infinity();
+      return;
+    }
+    out.worst = std::max({out.worst, std::abs(cp.distance - c.gap), (cp.p_W1 - c.p_WA1).norm(),
+                          (cp.p_W2 - c.p_WA2).norm()});
+    ++out.checks;
+  });
+  return out;
 }
 
 }  // namespace testing_support

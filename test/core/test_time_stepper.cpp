@@ -174,22 +174,11 @@ TEST(TimeStepper, ClosestPointsOfTwoEllipsoidsMatchTheDistanceOracle) {
                                 MakePose(Vec3(0.1, 0.05, 0.6), test_models::Rot(0.8, Vec3(0, 1, 2)))));
   m.bodies.back().w_WB0 = Vec3(0.5, -1.0, 2.0);
   const Model model = test_models::Finish(m);
-  double worst = 0.0, min_gap = 1.0;
-  int checks = 0;
-  testing_support::RunScene(model, 0.01, 0.6, [&](const Model& mm, const State& s, const Data& d, const StepReport& r) {
-    ASSERT_TRUE(r.converged);
-    const ContactResult& c = d.contacts[0];
-    min_gap = std::min(min_gap, c.gap);
-    if (c.gap < 1e-3) return;
-    const ClosestPointsResult cp = ComputeClosestPoints(mm.bodies[1].shape, s.X_WB(mm, 1), mm.bodies[0].shape,
-                                                        s.X_WB(mm, 0));
-    ASSERT_TRUE(cp.solved);
-    worst = std::max({worst, std::abs(cp.distance - c.gap), (cp.p_W1 - c.p_WA1).norm(), (cp.p_W2 - c.p_WA2).norm()});
-    ++checks;
-  });
-  EXPECT_GT(checks, 20);
-  EXPECT_LT(worst, 1e-6);
-  EXPECT_LT(min_gap, 0.05);  // it did fall close to the base
+  const testing_support::OracleComparison r = testing_support::CompareClosestPointsWithOracle(model, 0.01, 0.6);
+  ASSERT_EQ(r.nonconverged, 0);
+  EXPECT_GT(r.checks, 20);
+  EXPECT_LT(r.worst, 1e-6);
+  EXPECT_LT(r.min_gap, 0.05);  // it did fall close to the base
 }
 
 }  // namespace

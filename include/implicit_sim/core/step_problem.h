@@ -101,6 +101,8 @@ class StepProblem {
 
   // The largest |min(a, b)| over all complementarity pairs (in their scaled units).
   double ComplementarityError(const Eigen::VectorXd& z);
+  // The largest |E_i(z)| over the equations and the largest |min(a_i, b_i(z))| over the pairs, from the raw rows.
+  void RawResiduals(const Eigen::VectorXd& z, double* equations, double* complementarity);
 
   // The contact quantities of every pair for a solution z (one entry per model pair).
   void Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>* out);
@@ -161,6 +163,7 @@ class StepProblem {
   double force_scale_ = 1.0;
   double smoothing_ = 0.0;
   bool raw_ = false;
+  Eigen::VectorXd raw_scratch_;  // the raw rows, for RawResiduals
   std::vector<char> complementarity_kind_;  // per row: 0 equation, 1 complementarity, 2 normal-force complementarity
 };
 
