@@ -32,7 +32,8 @@ class StepNlp : public Ipopt::TNLP {
 
   bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag, IndexStyleEnum& style) override {
     n = m = problem_->size();
-    nnz_jac_g = n * n;  // dense: the step problems this serves are small
+    Update(n, z0_.data(), true);  // records the sparsity pattern
+    nnz_jac_g = static_cast<Index>(jacobian_.matrix.nonZeros());
     nnz_h_lag = 0;      // limited-memory Hessian approximation
     style = TNLP::C_STYLE;
     return true;
@@ -68,10 +69,13 @@ class StepNlp : public Ipopt::TNLP {
   bool eval_grad_f(Index n, const Number* x, bool new_x, Number* grad) override {
     if (!Update(n, x, new_x)) return false;
     std::fill(grad, grad + n, 0.0);
-    for (Index i = 0; i < n; ++i) {
-      if (scale_[i] <= 0.0) continue;
-      grad[i] += scale_[i] * raw_[i];
-      for (Index j = 0; j < n; ++j) grad[j] += scale_[i] * x[i] * jacobian_(i, j);
+    const Eigen::SparseMatrix<double>& J = jacobian_.matrix;
+    for (Index j = 0; j < n; ++j) {
+      if (scale_[j] > 0.0) grad[j] += scale_[j] * raw_[j];
+      for (Eigen::SparseMatrix<double>::InnerIterator it(J, j); it; ++it) {
+        const int i = static_cast<int>(it.row());
+        if (scale_[i] > 0.0) grad[j] += scale_[i] * x[i] * it.value();
+      }
     }
     return true;
   }
@@ -84,19 +88,19 @@ class StepNlp : public Ipopt::TNLP {
 
   bool eval_jac_g(Index n, const Number* x, bool new_x, Index, Index, Index* rows, Index* cols,
                   Number* values) override {
+    const Eigen::SparseMatrix<double>& J = jacobian_.matrix;
     if (!values) {
-      for (Index i = 0, k = 0; i < n; ++i) {
-        for (Index j = 0; j < n; ++j, ++k) {
-          rows[k] = i;
+      Index k = 0;
+      for (Index j = 0; j < n; ++j) {
+        for (Eigen::SparseMatrix<double>::InnerIterator it(J, j); it; ++it, ++k) {
+          rows[k] = static_cast<Index>(it.row());
           cols[k] = j;
         }
       }
       return true;
     }
     if (!Update(n, x, new_x)) return false;
-    for (Index i = 0, k = 0; i < n; ++i) {
-      for (Index j = 0; j < n; ++j, ++k) values[k] = jacobian_(i, j);
-    }
+    std::copy(J.valuePtr(), J.valuePtr() + J.nonZeros(), values);  // column by column, as the structure above
     return true;
   }
 
@@ -111,15 +115,18 @@ class StepNlp : public Ipopt::TNLP {
  private:
   bool Update(Index n, const Number* x, bool new_x) {
     if (new_x || !evaluated_) {
-      problem_->Evaluate(Eigen::Map<const Eigen::VectorXd>(x, n), &raw_, &jacobian_);
+      problem_->EvaluateSparse(Eigen::Map<const Eigen::VectorXd>(x, n), &raw_, &jacobian_);
       evaluated_ = true;
     }
-    return raw_.allFinite() && jacobian_.allFinite();
+    const Eigen::SparseMatrix<double>& J = jacobian_.matrix;
+    return raw_.allFinite() && std::all_of(J.valuePtr(), J.valuePtr() + J.nonZeros(), [](double v) {
+             return std::isfinite(v);
+           });
   }
 
   StepProblem* problem_;
   Eigen::VectorXd z0_, z_, raw_;
-  Eigen::MatrixXd jacobian_;
+  SparseJacobian jacobian_;  // the pattern is fixed for the solve: every entry is emitted at every evaluation
   std::vector<double> scale_;
   bool evaluated_ = false, finalized_ = false;
   Ipopt::SolverReturn status_ = Ipopt::INTERNAL_ERROR;

@@ -13,6 +13,22 @@ int Model::FindBody(const std::string& name) const {
   return -1;
 }
 
+int Model::PairIndex(int i, int j) const {
+  if (i == j || i < 0 || j < 0 || i >= static_cast<int>(bodies.size()) || j >= static_cast<int>(bodies.size())) {
+    return -1;
+  }
+  const int lo = std::min(i, j), hi = std::max(i, j);
+  const auto begin = pairs.begin() + pairs_of_lower[lo], end = pairs.begin() + pairs_of_lower[lo + 1];
+  const auto it = std::lower_bound(begin, end, hi, [](const ContactPair& pair, int body) {
+    return std::max(pair.body1, pair.body2) < body;
+  });
+  return it != end && std::max(it->body1, it->body2) == hi ? static_cast<int>(it - pairs.begin()) : -1;
+}
+
+std::string Model::PairName(int pair) const {
+  return bodies[pairs[pair].body1].name + "-" + bodies[pairs[pair].body2].name;
+}
+
 double Model::ForceScale() const {
   double scale = 1e-3;
   for (int b : moving_bodies) {

@@ -25,6 +25,8 @@ void RunSummary::Add(const StepReport& report, const Data& data) {
   substeps += report.substeps;
   smoothed_solves += report.smoothed_solves;
   ipopt_solves += report.ipopt_solves;
+  broad_phase_additions += report.broad_phase_additions;
+  max_pairs_in_ncp = std::max(max_pairs_in_ncp, report.pairs_in_ncp);
   max_iterations = std::max(max_iterations, report.iterations);
   max_residual = std::max(max_residual, report.residual);
   for (const ContactResult& contact : data.contacts) max_penetration = std::max(max_penetration, -contact.gap);
@@ -44,6 +46,8 @@ std::string RunSummary::ToJson() const {
   json += "  \"smoothed_solves\": " + std::to_string(smoothed_solves) + ",\n";
   json += "  \"ipopt_solves\": " + std::to_string(ipopt_solves) + ",\n";
   json += "  \"substeps\": " + std::to_string(substeps) + ",\n";
+  json += "  \"broad_phase_additions\": " + std::to_string(broad_phase_additions) + ",\n";
+  json += "  \"max_pairs_in_ncp\": " + std::to_string(max_pairs_in_ncp) + ",\n";
   json += "  \"max_iterations\": " + std::to_string(max_iterations) + ",\n";
   json += "  \"max_residual\": " + FormatNumber(max_residual) + ",\n";
   json += "  \"kinetic_energy_initial\": " + FormatNumber(kinetic_energy_initial) + ",\n";
@@ -51,16 +55,23 @@ std::string RunSummary::ToJson() const {
   return json + "}\n";
 }
 
-TrajectoryWriter::TrajectoryWriter(const std::string& path, const Model& model) : model_(model), out_(path) {
+TrajectoryWriter::TrajectoryWriter(const std::string& path, const Model& model, bool pair_columns,
+                                   const std::string& contacts_path)
+    : model_(model), pair_columns_(pair_columns), out_(path) {
   if (!out_) throw std::runtime_error("cannot write '" + path + "'");
+  if (!pair_columns_) {
+    contacts_.open(contacts_path);
+    if (!contacts_) throw std::runtime_error("cannot write '" + contacts_path + "'");
+    contacts_ << "t,pair,gap,fn,ft,mr,slip\n";
+  }
   out_ << "t";
   for (int b : model.moving_bodies) {
     for (const char* c : {"x", "y", "z", "qw", "qx", "qy", "qz", "vx", "vy", "vz", "wx", "wy", "wz"}) {
       out_ << ',' << model.bodies[b].name << '.' << c;
     }
   }
-  for (const ContactPair& pair : model.pairs) {
-    for (const char* c : {"gap", "fn", "ft", "mr", "slip"}) out_ << ',' << pair.name << '.' << c;
+  for (int pair = 0; pair_columns_ && pair < static_cast<int>(model.pairs.size()); ++pair) {
+    for (const char* c : {"gap", "fn", "ft", "mr", "slip"}) out_ << ',' << model.PairName(pair) << '.' << c;
   }
   out_ << ",step.iterations,step.residual,step.converged\n";
 }
@@ -76,6 +87,7 @@ void TrajectoryWriter::WriteBodies(const State& state) {
 void TrajectoryWriter::WriteInitial(const State& state) {
   WriteBodies(state);
   for (const ContactPair& pair : model_.pairs) {
+    if (!pair_columns_) break;
     const ClosestPointsResult cp =
         FindClosestPoints(model_.bodies[pair.body1].shape, state.X_WB(model_, pair.body1),
                              model_.bodies[pair.body2].shape, state.X_WB(model_, pair.body2));
@@ -87,9 +99,15 @@ void TrajectoryWriter::WriteInitial(const State& state) {
 void TrajectoryWriter::WriteStep(const State& state, const Data& data, const StepReport& report) {
   WriteBodies(state);
   for (const ContactResult& c : data.contacts) {
-    out_ << ',' << FormatNumber(c.gap) << ',' << FormatNumber(c.normal_force) << ','
-         << FormatNumber(c.friction_force_W.norm()) << ',' << FormatNumber(c.torsional_moment) << ','
-         << FormatNumber(c.slip_speed);
+    std::ostream& out = pair_columns_ ? out_ : contacts_;
+    if (!pair_columns_) {
+      if (!(c.normal_force > 0.0)) continue;
+      out << FormatNumber(state.t) << ',' << model_.PairName(c.pair);
+    }
+    out << ',' << FormatNumber(c.gap) << ',' << FormatNumber(c.normal_force) << ','
+        << FormatNumber(c.friction_force_W.norm()) << ',' << FormatNumber(c.torsional_moment) << ','
+        << FormatNumber(c.slip_speed);
+    if (!pair_columns_) out << '\n';
   }
   out_ << ',' << report.iterations << ',' << FormatNumber(report.residual) << ',' << (report.converged ? 1 : 0)
        << '\n';

@@ -44,27 +44,58 @@ Vec3 LeastAlignedAxis(const Vec3& n) {
 
 }  // namespace
 
-StepProblem::StepProblem(const Model& model)
+StepProblem::StepProblem(const Model& model, bool all_pairs)
     : model_(model), start_(model.bodies.size()), end_(model.bodies.size()), force_scale_(model.ForceScale()) {
-  size_ = 6 * model.num_moving();
-  for (const ContactPair& pair : model.pairs) {
+  external_wrench_W_ = Eigen::VectorXd::Zero(6 * model.num_moving());
+  locked_row_.assign(6 * model.num_moving(), 0);
+  for (size_t b = 0; b < model.bodies.size(); ++b) {
+    const int k = model.velocity_slot[b];
+    end_[b].col = k < 0 ? -1 : 6 * k;
+    for (int i = 0; k >= 0 && i < 6; ++i) locked_row_[6 * k + i] = model.bodies[b].locked[i];
+  }
+  std::vector<int> pairs;
+  for (int c = 0; all_pairs && c < static_cast<int>(model.pairs.size()); ++c) pairs.push_back(c);
+  std::vector<int> new_blocks;
+  Eigen::VectorXd z;
+  SetActivePairs(pairs, nullptr, &z, &new_blocks);
+}
+
+void StepProblem::SetActivePairs(const std::vector<int>& pairs, const Eigen::VectorXd* z_old, Eigen::VectorXd* z_new,
+                                 std::vector<int>* new_blocks) {
+  const std::vector<PairBlock> old_blocks = blocks_;
+  const std::vector<Vec3> old_axes = tangent_axis_;
+  blocks_.clear();
+  size_ = 6 * model_.num_moving();
+  for (int pair : pairs) {
     PairBlock block;
+    block.pair = pair;
     block.offset = size_;
-    block.k1 = static_cast<int>(model.bodies[pair.body1].shape.inequalities.size());
-    block.k2 = static_cast<int>(model.bodies[pair.body2].shape.inequalities.size());
+    block.k1 = static_cast<int>(model_.bodies[model_.pairs[pair].body1].shape.inequalities.size());
+    block.k2 = static_cast<int>(model_.bodies[model_.pairs[pair].body2].shape.inequalities.size());
     blocks_.push_back(block);
     size_ += block.size();
   }
-  tangent_axis_.assign(model.pairs.size(), Vec3::UnitX());
-  external_wrench_W_ = Eigen::VectorXd::Zero(6 * model.num_moving());
-  for (size_t b = 0; b < model.bodies.size(); ++b) {
-    end_[b].col = model.velocity_slot[b] < 0 ? -1 : 6 * model.velocity_slot[b];
-  }
+  tangent_axis_.assign(blocks_.size(), Vec3::UnitX());
   raw_scratch_ = Eigen::VectorXd::Zero(size_);
   complementarity_kind_.assign(size_, 0);
   for (const PairBlock& blk : blocks_) {
     for (int i = blk.offset + pi::kAlpha; i < blk.offset + blk.size(); ++i) complementarity_kind_[i] = 1;
     complementarity_kind_[blk.ln()] = 2;  // the normal force enters as ln / Fs
+  }
+  ++pattern_version_;
+  // Carry the old solution over: the body part, and the blocks of the pairs that stay (both lists are ascending).
+  z_new->setZero(size_);
+  new_blocks->clear();
+  if (z_old) z_new->head(6 * model_.num_moving()) = z_old->head(6 * model_.num_moving());
+  size_t o = 0;
+  for (size_t c = 0; c < blocks_.size(); ++c) {
+    while (o < old_blocks.size() && old_blocks[o].pair < blocks_[c].pair) ++o;
+    if (z_old && o < old_blocks.size() && old_blocks[o].pair == blocks_[c].pair) {
+      z_new->segment(blocks_[c].offset, blocks_[c].size()) = z_old->segment(old_blocks[o].offset, blocks_[c].size());
+      tangent_axis_[c] = old_axes[o];
+    } else {
+      new_blocks->push_back(static_cast<int>(c));
+    }
   }
 }
 
@@ -99,9 +130,11 @@ void StepProblem::BeginStep(const Model& model, const State& start, double h,
 }
 
 void StepProblem::ResetTangentAxes(const Eigen::VectorXd& z) {
-  for (size_t c = 0; c < blocks_.size(); ++c) {
-    tangent_axis_[c] = LeastAlignedAxis(z.segment<3>(blocks_[c].offset + pi::kN));
-  }
+  for (size_t c = 0; c < blocks_.size(); ++c) ResetTangentAxis(static_cast<int>(c), z);
+}
+
+void StepProblem::ResetTangentAxis(int c, const Eigen::VectorXd& z) {
+  tangent_axis_[c] = LeastAlignedAxis(z.segment<3>(blocks_[c].offset + pi::kN));
 }
 
 void StepProblem::UpdateTangentAxes(Eigen::VectorXd* z) {
@@ -109,7 +142,7 @@ void StepProblem::UpdateTangentAxes(Eigen::VectorXd* z) {
     const int off = blocks_[c].offset;
     const Vec3 n = z->segment<3>(off + pi::kN);
     if (std::abs(tangent_axis_[c].dot(n)) < 0.9 * n.norm()) continue;
-    const FrictionParams& fr = model_.pairs[c].friction;
+    const FrictionParams& fr = model_.pairs[blocks_[c].pair].friction;
     Vec3 t, o;
     Mat3 dt_dn, do_dn;
     TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
@@ -124,7 +157,7 @@ void StepProblem::UpdateTangentAxes(Eigen::VectorXd* z) {
 
 void StepProblem::PredictClosestPoints(Eigen::VectorXd* z) const {
   for (size_t c = 0; c < blocks_.size(); ++c) {
-    const ContactPair& pair = model_.pairs[c];
+    const ContactPair& pair = model_.pairs[blocks_[c].pair];
     const int off = blocks_[c].offset;
     for (const auto& [body, column] : {std::make_pair(pair.body1, off + pi::kA1), std::make_pair(pair.body2, off + pi::kA2)}) {
       z->segment<3>(column) += h_ * start_[body].v0;
@@ -135,26 +168,28 @@ void StepProblem::PredictClosestPoints(Eigen::VectorXd* z) const {
 }
 
 void StepProblem::SeedFriction(Eigen::VectorXd* z) const {
-  for (size_t c = 0; c < blocks_.size(); ++c) {
-    const ContactPair& pair = model_.pairs[c];
-    const FrictionParams& fr = pair.friction;
-    const PairBlock& blk = blocks_[c];
-    const int off = blk.offset;
-    const BodyStep& s1 = start_[pair.body1];
-    const BodyStep& s2 = start_[pair.body2];
-    const Vec3 n = z->segment<3>(off + pi::kN).normalized();
-    const Vec3 v_rel = (s1.v0 + s1.w0.cross(z->segment<3>(off + pi::kA1) - s1.p0)) -
-                       (s2.v0 + s2.w0.cross(z->segment<3>(off + pi::kA2) - s2.p0));
-    Vec3 t, o;
-    Mat3 dt_dn, do_dn;
-    TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
-    const Vec3 slip(fr.e_t * t.dot(v_rel), fr.e_o * o.dot(v_rel), fr.e_r * n.dot(s1.w0 - s2.w0));
-    const double sigma = slip.norm();
-    z->segment<3>(off + pi::kSt) = sigma > 1e-9 ? Vec3(-slip / sigma) : Vec3::Zero();
-    // No slip yet: sigma = 0, s = 0 would be a saddle of the merit function, so start from sigma > 0 (the rows
-    // e (t.v_rel) + s sigma then determine s, and sigma moves to the slip speed or to 0 when the contact sticks).
-    (*z)[blk.sigma()] = sigma > 1e-9 ? sigma : 1e-3;
-  }
+  for (size_t c = 0; c < blocks_.size(); ++c) SeedFriction(static_cast<int>(c), z);
+}
+
+void StepProblem::SeedFriction(int c, Eigen::VectorXd* z) const {
+  const ContactPair& pair = model_.pairs[blocks_[c].pair];
+  const FrictionParams& fr = pair.friction;
+  const PairBlock& blk = blocks_[c];
+  const int off = blk.offset;
+  const BodyStep& s1 = start_[pair.body1];
+  const BodyStep& s2 = start_[pair.body2];
+  const Vec3 n = z->segment<3>(off + pi::kN).normalized();
+  const Vec3 v_rel = (s1.v0 + s1.w0.cross(z->segment<3>(off + pi::kA1) - s1.p0)) -
+                     (s2.v0 + s2.w0.cross(z->segment<3>(off + pi::kA2) - s2.p0));
+  Vec3 t, o;
+  Mat3 dt_dn, do_dn;
+  TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
+  const Vec3 slip(fr.e_t * t.dot(v_rel), fr.e_o * o.dot(v_rel), fr.e_r * n.dot(s1.w0 - s2.w0));
+  const double sigma = slip.norm();
+  z->segment<3>(off + pi::kSt) = sigma > 1e-9 ? Vec3(-slip / sigma) : Vec3::Zero();
+  // No slip yet: sigma = 0, s = 0 would be a saddle of the merit function, so start from sigma > 0 (the rows
+  // e (t.v_rel) + s sigma then determine s, and sigma moves to the slip speed or to 0 when the contact sticks).
+  (*z)[blk.sigma()] = sigma > 1e-9 ? sigma : 1e-3;
 }
 
 void StepProblem::UpdateBodies(const Eigen::VectorXd& z) {
@@ -197,28 +232,83 @@ StepProblem::Eval StepProblem::EvaluateInequality(int body, int k, const Vec3& p
   return out;
 }
 
-void StepProblem::Evaluate(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J) {
-  UpdateBodies(z);
-  Phi->setZero(size_);
-  if (J) J->setZero(size_, size_);
-  AddBodyRows(z, Phi, J);
-  for (size_t c = 0; c < blocks_.size(); ++c) AddPair(static_cast<int>(c), z, Phi, J);
-  // Locked degrees of freedom: the row of a locked velocity becomes "velocity = 0".
-  for (int k = 0; k < model_.num_moving(); ++k) {
-    const Body& body = model_.bodies[model_.moving_bodies[k]];
-    for (int i = 0; i < 6; ++i) {
-      if (!body.locked[i]) continue;
-      (*Phi)[6 * k + i] = z[6 * k + i];
-      if (J) {
-        J->row(6 * k + i).setZero();
-        (*J)(6 * k + i, 6 * k + i) = 1.0;
-      }
+template <typename Block>
+void StepProblem::AddJ(int row, int col, const Block& block) {
+  if (J_dense_) {  // rows of locked velocities are overwritten at the end of EvaluateAll
+    J_dense_->block(row, col, block.rows(), block.cols()) += block;
+  } else if (J_sparse_) {
+    for (int j = 0; j < block.cols(); ++j) {
+      for (int i = 0; i < block.rows(); ++i) AddJ(row + i, col + j, static_cast<double>(block(i, j)));
     }
   }
 }
 
+void StepProblem::AddJ(int row, int col, double value) {
+  if (J_dense_) {
+    (*J_dense_)(row, col) += value;
+  } else if (J_sparse_) {
+    if (row < static_cast<int>(locked_row_.size()) && locked_row_[row]) return;  // the pattern leaves them out
+    if (J_sparse_->recording) {
+      J_sparse_->recorded.emplace_back(row, col, value);
+    } else {
+      J_sparse_->matrix.valuePtr()[J_sparse_->slot[J_sparse_->cursor++]] += value;
+    }
+  }
+}
+
+void StepProblem::EvaluateAll(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
+  UpdateBodies(z);
+  Phi->setZero(size_);
+  AddBodyRows(z, Phi);
+  for (size_t c = 0; c < blocks_.size(); ++c) AddPair(static_cast<int>(c), z, Phi);
+  // Locked degrees of freedom: the row of a locked velocity becomes "velocity = 0" (AddJ skipped its other entries).
+  for (int row = 0; row < static_cast<int>(locked_row_.size()); ++row) {
+    if (!locked_row_[row]) continue;
+    (*Phi)[row] = z[row];
+    if (J_dense_) J_dense_->row(row).setZero();
+    locked_row_[row] = 0;
+    AddJ(row, row, 1.0);
+    locked_row_[row] = 1;
+  }
+}
+
+void StepProblem::Evaluate(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J) {
+  if (J) J->setZero(size_, size_);
+  J_dense_ = J;
+  J_sparse_ = nullptr;
+  EvaluateAll(z, Phi);
+  J_dense_ = nullptr;
+}
+
+void StepProblem::EvaluateSparse(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, SparseJacobian* J) {
+  J_dense_ = nullptr;
+  J_sparse_ = J;
+  if (J) {
+    J->recording = J->pattern_version != pattern_version_;
+    J->recorded.clear();
+    J->cursor = 0;
+    if (!J->recording) std::fill(J->matrix.valuePtr(), J->matrix.valuePtr() + J->matrix.nonZeros(), 0.0);
+  }
+  EvaluateAll(z, Phi);
+  J_sparse_ = nullptr;
+  if (!J || !J->recording) return;
+  // First evaluation for this layout: build the pattern (duplicates summed) and each emitted entry's slot in it.
+  J->matrix.resize(size_, size_);
+  J->matrix.setFromTriplets(J->recorded.begin(), J->recorded.end());
+  J->matrix.makeCompressed();
+  J->slot.resize(J->recorded.size());
+  for (size_t k = 0; k < J->recorded.size(); ++k) {
+    const int col = J->recorded[k].col();
+    const int* begin = J->matrix.innerIndexPtr() + J->matrix.outerIndexPtr()[col];
+    const int* end = J->matrix.innerIndexPtr() + J->matrix.outerIndexPtr()[col + 1];
+    J->slot[k] = static_cast<int>(std::lower_bound(begin, end, J->recorded[k].row()) - J->matrix.innerIndexPtr());
+  }
+  J->pattern_version = pattern_version_;
+  J->recording = false;
+}
+
 // Newton-Euler in impulse form divided by h (paper eq. 1 discretized): force units, scaled by 1/Fs.
-void StepProblem::AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J) const {
+void StepProblem::AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
   const double Fs = force_scale_;
   for (int k = 0; k < model_.num_moving(); ++k) {
     const int b = model_.moving_bodies[k];
@@ -235,18 +325,15 @@ void StepProblem::AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Ei
     const Mat3 I_W1 = e.R * body.I_B * e.R.transpose();
     const Vec3 w1 = z.segment<3>(row + 3);
     Phi->segment<3>(row + 3) = ((I_W1 * w1 - s.I_W0 * s.w0) / h_ - tau_ext) / Fs;
-    if (J) {
-      J->block<3, 3>(row, row) += Mat3::Identity() * body.mass / (h_ * Fs);
-      // d(I_W w)/dtheta = I_W [w]x - [I_W w]x for R -> Exp(dtheta) R, and dtheta/dw1 = h J_l(h w1).
-      J->block<3, 3>(row + 3, row + 3) +=
-          (I_W1 + (I_W1 * Skew(w1) - Skew(I_W1 * w1)) * e.dtheta_dw) / (h_ * Fs);
-    }
+    AddJ(row, row, Mat3(Mat3::Identity() * body.mass / (h_ * Fs)));
+    // d(I_W w)/dtheta = I_W [w]x - [I_W w]x for R -> Exp(dtheta) R, and dtheta/dw1 = h J_l(h w1).
+    AddJ(row + 3, row + 3, Mat3((I_W1 + (I_W1 * Skew(w1) - Skew(I_W1 * w1)) * e.dtheta_dw) / (h_ * Fs)));
   }
 }
 
 // Adds -sign * (F, r x F + lr n) / Fs to the body rows of `body` (sign +1 for body 1, -1 for body 2).
 void StepProblem::AddContactWrench(int c, int body, double sign, const Vec3& r, const ContactWrench& w,
-                                   Eigen::VectorXd* Phi, Eigen::MatrixXd* J) const {
+                                   Eigen::VectorXd* Phi) {
   const BodyEnd& e = end_[body];
   if (e.col < 0) return;
   const PairBlock& blk = blocks_[c];
@@ -255,23 +342,23 @@ void StepProblem::AddContactWrench(int c, int body, double sign, const Vec3& r, 
   const double s = sign / force_scale_;
   Phi->segment<3>(row) -= s * w.F;
   Phi->segment<3>(row + 3) -= s * (r.cross(w.F) + w.lr * w.n);
-  if (!J) return;
+  if (!J_dense_ && !J_sparse_) return;
   const Mat3 rx = Skew(r), Fx = Skew(w.F);
-  J->block<3, 3>(row, off + pi::kN) -= s * w.dF_dn;
-  J->block<3, 1>(row, blk.ln()) -= s * w.dF_dln;
-  J->block<3, 1>(row, off + pi::kSt) -= s * w.dF_dst;
-  J->block<3, 1>(row, off + pi::kSo) -= s * w.dF_dso;
-  J->block<3, 3>(row + 3, a_col) += s * Fx;           // d(r x F)/da = -[F]x
-  J->block<3, 3>(row + 3, e.col) -= s * h_ * Fx;      // r = a - p0 - h v
-  J->block<3, 3>(row + 3, off + pi::kN) -= s * (rx * w.dF_dn + w.lr * Mat3::Identity());
-  J->block<3, 1>(row + 3, blk.ln()) -= s * (rx * w.dF_dln + w.dlr_dln * w.n);
-  J->block<3, 1>(row + 3, off + pi::kSt) -= s * rx * w.dF_dst;
-  J->block<3, 1>(row + 3, off + pi::kSo) -= s * rx * w.dF_dso;
-  J->block<3, 1>(row + 3, off + pi::kSr) -= s * w.dlr_dsr * w.n;
+  AddJ(row, off + pi::kN, Mat3(-(s * w.dF_dn)));
+  AddJ(row, blk.ln(), Vec3(-(s * w.dF_dln)));
+  AddJ(row, off + pi::kSt, Vec3(-(s * w.dF_dst)));
+  AddJ(row, off + pi::kSo, Vec3(-(s * w.dF_dso)));
+  AddJ(row + 3, a_col, Mat3(s * Fx));         // d(r x F)/da = -[F]x
+  AddJ(row + 3, e.col, Mat3(-(s * h_ * Fx)));  // r = a - p0 - h v
+  AddJ(row + 3, off + pi::kN, Mat3(-(s * (rx * w.dF_dn + w.lr * Mat3::Identity()))));
+  AddJ(row + 3, blk.ln(), Vec3(-(s * (rx * w.dF_dln + w.dlr_dln * w.n))));
+  AddJ(row + 3, off + pi::kSt, Vec3(-(s * rx * w.dF_dst)));
+  AddJ(row + 3, off + pi::kSo, Vec3(-(s * rx * w.dF_dso)));
+  AddJ(row + 3, off + pi::kSr, Vec3(-(s * w.dlr_dsr * w.n)));
 }
 
-void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J) const {
-  const ContactPair& pair = model_.pairs[c];
+void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
+  const ContactPair& pair = model_.pairs[blocks_[c].pair];
   const FrictionParams& fr = pair.friction;
   const PairBlock& blk = blocks_[c];
   const int off = blk.offset;
@@ -282,11 +369,12 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi,
   const BodyEnd& e2 = end_[pair.body2];
   const Vec3 r1 = a1 - e1.p, r2 = a2 - e2.p;
   const Mat3 I3 = Mat3::Identity();
-  auto add = [J](int row, int col, const auto& block) {
-    if (J) J->block(row, col, block.rows(), block.cols()) += block;
+  const bool want_J = J_dense_ || J_sparse_;
+  auto add = [this, want_J](int row, int col, const auto& block) {
+    if (want_J) AddJ(row, col, block);
   };
-  auto add1 = [J](int row, int col, double value) {
-    if (J) (*J)(row, col) += value;
+  auto add1 = [this, want_J](int row, int col, double value) {
+    if (want_J) AddJ(row, col, value);
   };
 
   // a1 - a2 - d n = 0 (the closest points are d apart along n).
@@ -354,11 +442,18 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi,
       add(row, side.e->col + 3, Eigen::RowVector3d(-s * u.transpose() * Skew(side.r)));
     }
   };
+  // At a separated contact (d > 0, so ln = 0) the friction fractions are physically void, and with no slip
+  // (sigma = 0) nothing would determine them: the Jacobian is singular wherever two bodies rest near each other
+  // without touching. The LM step of the dense solver copes; for the sparse LU the rows use sigma + max(d, 0) / h in
+  // place of sigma (set_regular_separated_friction), which fixes s at a separated contact and is exactly the paper's
+  // row at a touching one (d = 0).
+  const double sigma_eff = regular_separated_friction_ ? sigma + std::max(d, 0.0) / h_ : sigma;
+  const double dsigma_dd = regular_separated_friction_ && d > 0.0 ? 1.0 / h_ : 0.0;
   const int rt = off + 10, ro = off + 11, rr = off + 12;
-  (*Phi)[rt] = fr.e_t * t.dot(v_rel) + st * sigma;
-  (*Phi)[ro] = fr.e_o * o.dot(v_rel) + so * sigma;
-  (*Phi)[rr] = fr.e_r * n.dot(w_rel) + sr * sigma;
-  if (J) {
+  (*Phi)[rt] = fr.e_t * t.dot(v_rel) + st * sigma_eff;
+  (*Phi)[ro] = fr.e_o * o.dot(v_rel) + so * sigma_eff;
+  (*Phi)[rr] = fr.e_r * n.dot(w_rel) + sr * sigma_eff;
+  if (want_J) {
     add(rt, off + pi::kN, Eigen::RowVector3d(fr.e_t * v_rel.transpose() * dt_dn));
     add(ro, off + pi::kN, Eigen::RowVector3d(fr.e_o * v_rel.transpose() * do_dn));
     add(rr, off + pi::kN, Eigen::RowVector3d(fr.e_r * w_rel.transpose()));
@@ -366,19 +461,23 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi,
     add_rel_velocity(ro, fr.e_o, o);
     if (e1.col >= 0) add(rr, e1.col + 3, Eigen::RowVector3d(fr.e_r * n.transpose()));
     if (e2.col >= 0) add(rr, e2.col + 3, Eigen::RowVector3d(-fr.e_r * n.transpose()));
-    add1(rt, off + pi::kSt, sigma);
-    add1(ro, off + pi::kSo, sigma);
-    add1(rr, off + pi::kSr, sigma);
+    // The diagonal entries carry the sparse solver's proximal regularization (never Phi).
+    add1(rt, off + pi::kSt, sigma_eff + regularization_);
+    add1(ro, off + pi::kSo, sigma_eff + regularization_);
+    add1(rr, off + pi::kSr, sigma_eff + regularization_);
     add1(rt, blk.sigma(), st);
     add1(ro, blk.sigma(), so);
     add1(rr, blk.sigma(), sr);
+    add1(rt, off + pi::kD, st * dsigma_dd);
+    add1(ro, off + pi::kD, so * dsigma_dd);
+    add1(rr, off + pi::kD, sr * dsigma_dd);
   }
 
   // Non-penetration (paper eq. 11 with the signed distance d as gap): ln / Fs _|_ d.
   const double Fs = force_scale_;
   const FB fb_n = FischerBurmeister(ln / Fs, d, smoothing_, raw_);
   (*Phi)[blk.ln()] = fb_n.value;
-  add1(blk.ln(), blk.ln(), fb_n.da / Fs);
+  add1(blk.ln(), blk.ln(), (fb_n.da + regularization_) / Fs);
   add1(blk.ln(), off + pi::kD, fb_n.db);
 
   // Friction ellipsoid (paper eq. 5 divided by (mu ln)^2): sigma _|_ 1 - s_t^2 - s_o^2 - s_r^2.
@@ -403,8 +502,8 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi,
   w.lr = mu * fr.e_r * ln * sr;
   w.dlr_dln = mu * fr.e_r * sr;
   w.dlr_dsr = mu * fr.e_r * ln;
-  AddContactWrench(c, pair.body1, +1.0, r1, w, Phi, J);
-  AddContactWrench(c, pair.body2, -1.0, r2, w, Phi, J);
+  AddContactWrench(c, pair.body1, +1.0, r1, w, Phi);
+  AddContactWrench(c, pair.body2, -1.0, r2, w, Phi);
 }
 
 void StepProblem::RawResiduals(const Eigen::VectorXd& z, double* equations, double* complementarity) {
@@ -431,11 +530,13 @@ double StepProblem::ComplementarityError(const Eigen::VectorXd& z) {
 
 void StepProblem::Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>* contacts) {
   UpdateBodies(z);
+  contacts->resize(blocks_.size());
   for (size_t c = 0; c < blocks_.size(); ++c) {
-    const ContactPair& pair = model_.pairs[c];
+    const ContactPair& pair = model_.pairs[blocks_[c].pair];
     const PairBlock& blk = blocks_[c];
     const int off = blk.offset;
     ContactResult& out = (*contacts)[c];
+    out.pair = blk.pair;
     out.p_WA1 = z.segment<3>(off + pi::kA1);
     out.p_WA2 = z.segment<3>(off + pi::kA2);
     out.n_W = z.segment<3>(off + pi::kN);

@@ -1,6 +1,8 @@
 #include "implicit_sim/core/time_stepper.h"
 
+#include <algorithm>
 #include <chrono>
+#include <iterator>
 #include <cmath>
 #include <stdexcept>
 
@@ -19,6 +21,10 @@ bool StepperOptions::IsValid(std::string* error) const {
     *error = "time step h must be in (0, 1] s, got " + std::to_string(h);
     return false;
   }
+  if (!(broad_phase_margin >= 0.0 && broad_phase_margin <= 10.0)) {
+    *error = "broad_phase_margin must be in [0, 10] m, got " + std::to_string(broad_phase_margin);
+    return false;
+  }
   if (!(contact_threshold >= 0.0 && std::isfinite(contact_threshold))) {
     *error = "contact_threshold must be finite and >= 0 N, got " + std::to_string(contact_threshold);
     return false;
@@ -26,14 +32,23 @@ bool StepperOptions::IsValid(std::string* error) const {
   return newton.IsValid(error);
 }
 
-Data::Data(const Model& model)
-    : problem(model),
-      solver(problem.size()),
+Data::Data(const Model& model, PairSelection selection)
+    : broad_phase(selection == PairSelection::kBroadPhase ||
+                  (selection == PairSelection::kAuto && static_cast<int>(model.pairs.size()) > kAllPairsLimit)),
+      problem(model, !broad_phase),
+      solver(problem.size(), broad_phase),
+      broad(model),
       z(Eigen::VectorXd::Zero(problem.size())),
       z_start(Eigen::VectorXd::Zero(problem.size())),
       z_best(Eigen::VectorXd::Zero(problem.size())),
       z_backup(kMaxSubstepDepth + 1, Eigen::VectorXd::Zero(problem.size())),
-      contacts(model.pairs.size()) {}
+      pairs_backup(kMaxSubstepDepth + 1),
+      X_WB(model.bodies.size(), Pose::Identity()),
+      inflation(model.bodies.size(), 0.0),
+      contacts(problem.blocks().size()) {
+  for (size_t c = 0; c < contacts.size(); ++c) contacts[c].pair = problem.blocks()[c].pair;
+  problem.set_regular_separated_friction(broad_phase);
+}
 
 namespace {
 
@@ -74,8 +89,8 @@ void WriteState(const Model& model, const StepProblem& problem, const Eigen::Vec
 // Fills the contact block of pair c in z from closest points at the configuration `state` (closed form, or the
 // distance oracle) for a cold start, with multipliers consistent with the normal and a normal force guess.
 void SeedPair(const Model& model, const State& state, int c, const StepProblem& problem, Eigen::VectorXd* z) {
-  const ContactPair& pair = model.pairs[c];
   const PairBlock& blk = problem.blocks()[c];
+  const ContactPair& pair = model.pairs[blk.pair];
   const Body& body1 = model.bodies[pair.body1];
   const Body& body2 = model.bodies[pair.body2];
   const Pose X_WB1 = state.X_WB(model, pair.body1), X_WB2 = state.X_WB(model, pair.body2);
@@ -100,6 +115,63 @@ void SeedPair(const Model& model, const State& state, int c, const StepProblem& 
   (*z)[blk.ln()] = cp.distance < 1e-6 ? 0.5 * problem.force_scale() : 0.0;
 }
 
+void ActivePairs(const StepProblem& problem, std::vector<int>* pairs) {
+  pairs->clear();
+  for (const PairBlock& blk : problem.blocks()) pairs->push_back(blk.pair);
+}
+
+// Lays the problem out for `pairs`, carrying z over; the blocks of new pairs are seeded from `state` like a cold start.
+void SetPairs(const Model& model, const State& state, const std::vector<int>& pairs, Data* data) {
+  StepProblem& problem = data->problem;
+  problem.SetActivePairs(pairs, &data->z, &data->z_remap, &data->new_blocks);
+  data->z.swap(data->z_remap);
+  for (int c : data->new_blocks) {
+    SeedPair(model, state, c, problem, &data->z);
+    problem.ResetTangentAxis(c, data->z);
+    problem.SeedFriction(c, &data->z);
+  }
+  data->z_start.resize(problem.size());
+  data->z_best.resize(problem.size());
+}
+
+// The pairs of the NCP for a step of length h from `state`: the broad phase over bounding spheres grown by the motion
+// possible within the step plus a margin, joined with the pairs the end-of-step check forced in (Data::forced_pairs).
+void SelectPairs(const Model& model, const StepperOptions& options, double h, const State& state, Data* data) {
+  const double fall = 0.5 * model.gravity_W.norm() * h * h;
+  for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
+    data->X_WB[b] = state.X_WB(model, b);
+    const int k = model.velocity_slot[b];
+    const double lever = model.bodies[b].shape.X_BS.translation().norm();  // of the bounding sphere's centre (m)
+    data->inflation[b] =
+        k < 0 ? 0.0 : h * (state.v_WB(k).norm() + state.w_WB(k).norm() * lever) + fall + options.broad_phase_margin;
+  }
+  data->broad.FindPairs(data->X_WB, data->inflation, &data->candidates);
+  data->merged.clear();
+  std::set_union(data->candidates.begin(), data->candidates.end(), data->forced_pairs.begin(),
+                 data->forced_pairs.end(), std::back_inserter(data->merged));
+  ActivePairs(data->problem, &data->pairs);
+  if (data->merged != data->pairs) SetPairs(model, state, data->merged, data);
+}
+
+// The end-of-step check of the pairs left out of the NCP: bounding spheres (no growth) at the end poses of z. Pairs
+// that overlap are added to Data::forced_pairs; returns how many.
+int CheckLeftOutPairs(const Model& model, Data* data) {
+  for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
+    data->X_WB[b] = data->problem.EndPose(b, data->z);
+    data->inflation[b] = 0.0;
+  }
+  data->broad.FindPairs(data->X_WB, data->inflation, &data->candidates);
+  ActivePairs(data->problem, &data->pairs);
+  int missing = 0;
+  for (int pair : data->candidates) {
+    if (std::binary_search(data->pairs.begin(), data->pairs.end(), pair)) continue;
+    data->forced_pairs.push_back(pair);
+    ++missing;
+  }
+  std::sort(data->forced_pairs.begin(), data->forced_pairs.end());
+  return missing;
+}
+
 // One solve of the step NCP of length h from `state`, climbing the ladder while it fails: warm start, cold start
 // (closed-form or oracle closest points), smoothing continuation, Ipopt then a Newton polish. Leaves the best
 // solution in data->z; does not touch the state. With the Ipopt solver: warm start, then cold start, both by Ipopt.
@@ -107,9 +179,10 @@ NewtonResult SolveStep(const Model& model, const StepperOptions& options, double
                        const Eigen::VectorXd* wrench, Data* data, StepReport* report) {
   StepProblem& problem = data->problem;
   problem.BeginStep(model, state, h, wrench);
+  if (data->broad_phase) SelectPairs(model, options, h, state, data);
   auto cold_guess = [&]() {
     data->z_start.head(6 * model.num_moving()) = state.v;
-    for (int c = 0; c < static_cast<int>(model.pairs.size()); ++c) SeedPair(model, state, c, problem, &data->z_start);
+    for (int c = 0; c < static_cast<int>(problem.blocks().size()); ++c) SeedPair(model, state, c, problem, &data->z_start);
     problem.ResetTangentAxes(data->z_start);
     problem.SeedFriction(&data->z_start);
   };
@@ -196,9 +269,29 @@ bool Advance(const Model& model, const StepperOptions& options, double h, int de
              State* state, Data* data, StepReport* report) {
   Eigen::VectorXd& backup = data->z_backup[depth];
   backup = data->z;
+  if (data->broad_phase) ActivePairs(data->problem, &data->pairs_backup[depth]);
   const bool had_warm_start = data->has_warm_start;
-  const NewtonResult result = SolveStep(model, options, h, *state, wrench, data, report);
+  data->forced_pairs.clear();
+  NewtonResult result;
+  for (int round = 1;; ++round) {
+    result = SolveStep(model, options, h, *state, wrench, data, report);
+    if (!data->broad_phase || !data->z.allFinite()) break;
+    // No pair may interpenetrate at the step end, in or out of the NCP: re-solve with the ones found overlapping.
+    const int missing = CheckLeftOutPairs(model, data);
+    if (missing == 0) break;
+    report->broad_phase_additions += missing;
+    if (round == Data::kMaxBroadPhaseRounds) {
+      result.converged = false;
+      break;
+    }
+  }
+  report->pairs_in_ncp = static_cast<int>(data->problem.blocks().size());
   if (!result.converged && depth < Data::kMaxSubstepDepth) {
+    if (data->broad_phase) {
+      data->problem.SetActivePairs(data->pairs_backup[depth], nullptr, &data->z_remap, &data->new_blocks);
+      data->z_start.resize(data->problem.size());
+      data->z_best.resize(data->problem.size());
+    }
     data->z = backup;
     data->has_warm_start = had_warm_start;
     report->substeps += 1;

@@ -101,8 +101,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    TrajectoryWriter writer(args.out + "/trajectory.csv", model);
     Data data(model);
+    TrajectoryWriter writer(args.out + "/trajectory.csv", model, !data.broad_phase, args.out + "/contacts.csv");
     State state = State::Initial(model);
     RunSummary summary;
     summary.scene = model.scene_name;

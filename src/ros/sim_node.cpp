@@ -1,5 +1,6 @@
 #include "implicit_sim/ros/sim_node.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -274,7 +275,8 @@ void SimNode::PublishStepStats(const StepReport& r, double sim_time, uint64_t st
 void SimNode::PublishLoop() {
   const visualization_msgs::MarkerArray shapes = conv::ShapeMarkers(model_);
   State snapshot = State::Initial(model_);
-  std::vector<ContactResult> contacts(model_.pairs.size());
+  std::vector<ContactResult> contacts;
+  std::vector<int> shown_pairs, active_pairs;  // pairs with contact markers: last published, current
   ros::WallRate rate(params_.publish_rate);
   WallClock::time_point last_diagnostics = WallClock::now(), last_tf_wall;
   double last_tf_time = -1.0;
@@ -321,9 +323,9 @@ void SimNode::PublishLoop() {
       implicit_sim::Contacts msg;
       msg.header.stamp = stamp;
       msg.header.frame_id = params_.world_frame;
-      for (int c = 0; have_contacts && c < static_cast<int>(contacts.size()); ++c) {
-        if (contacts[c].normal_force > options_.contact_threshold) {
-          msg.contacts.push_back(conv::ToContactMsg(model_, c, contacts[c]));
+      for (const ContactResult& contact : contacts) {
+        if (have_contacts && contact.normal_force > options_.contact_threshold) {
+          msg.contacts.push_back(conv::ToContactMsg(model_, contact.pair, contact));
         }
       }
       contacts_pub_.publish(msg);
@@ -331,11 +333,20 @@ void SimNode::PublishLoop() {
     if (markers_pub_.getNumSubscribers() > 0) {
       visualization_msgs::MarkerArray msg = shapes;
       for (auto& m : msg.markers) m.header.stamp = stamp;
-      for (int c = 0; c < static_cast<int>(contacts.size()); ++c) {
-        const bool active = have_contacts && contacts[c].normal_force > options_.contact_threshold;
-        conv::AppendContactMarkers(c, contacts[c], active, params_.world_frame, params_.force_marker_scale,
+      active_pairs.clear();
+      for (const ContactResult& contact : contacts) {
+        if (!have_contacts || !(contact.normal_force > options_.contact_threshold)) continue;
+        conv::AppendContactMarkers(contact.pair, contact, true, params_.world_frame, params_.force_marker_scale,
+                                   params_.contact_marker_size, &msg);
+        active_pairs.push_back(contact.pair);
+      }
+      std::sort(active_pairs.begin(), active_pairs.end());
+      for (int pair : shown_pairs) {  // contacts that ended (or left the NCP): delete their markers
+        if (std::binary_search(active_pairs.begin(), active_pairs.end(), pair)) continue;
+        conv::AppendContactMarkers(pair, ContactResult(), false, params_.world_frame, params_.force_marker_scale,
                                    params_.contact_marker_size, &msg);
       }
+      shown_pairs.swap(active_pairs);
       markers_pub_.publish(msg);
     }
     if (WallClock::now() - last_diagnostics >= std::chrono::seconds(1)) {
@@ -404,7 +415,7 @@ bool SimNode::OnReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& 
   time_offset_ = SimTime();  // simulation time keeps increasing; bodies return to their initial state
   state_ = initial_state_;
   data_.has_warm_start = false;
-  for (ContactResult& c : data_.contacts) c = ContactResult();
+  data_.contacts.clear();
   wrenches_.clear();
   commanded_W_.setZero();
   restart_pacing_ = true;

@@ -17,7 +17,7 @@ using test_models::MovingBody;
 
 double ForceBetween(const Model& model, const Data& data, const std::string& a, const std::string& b) {
   for (size_t c = 0; c < model.pairs.size(); ++c) {
-    if (model.pairs[c].name == a + "-" + b || model.pairs[c].name == b + "-" + a) return data.contacts[c].normal_force;
+    if (model.PairName(c) == a + "-" + b || model.PairName(c) == b + "-" + a) return data.contacts[c].normal_force;
   }
   ADD_FAILURE() << "no pair " << a << "-" << b;
   return NAN;

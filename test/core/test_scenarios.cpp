@@ -136,8 +136,8 @@ TEST(P3SphereOnTwoSpheres, EventsVelocityAndNonPenetrationMatchTheReference) {
   const Model model = LoadSceneFromFile(ScenePath("p3_sphere_on_two_spheres.urdf"));
   const int ball = model.FindBody("ball");
   const int pair_a = 0, pair_b = 1;
-  ASSERT_EQ(model.pairs[pair_a].name, "ball-sphere_a");
-  ASSERT_EQ(model.pairs[pair_b].name, "ball-sphere_b");
+  ASSERT_EQ(model.PairName(pair_a), "ball-sphere_a");
+  ASSERT_EQ(model.PairName(pair_b), "ball-sphere_b");
   int toggles[2] = {0, 0};
   bool active[2] = {true, true};  // both touch at t = 0
   double separation[2] = {-1.0, -1.0}, slide_b = -1.0, max_bound = 0.0, max_closed_form = 0.0;

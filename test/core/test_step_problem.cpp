@@ -12,9 +12,12 @@
 namespace implicit_sim {
 namespace {
 
-// Compares J with central differences of Phi column by column; reports the worst block by name.
-void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed) {
+// Compares J with central differences of Phi column by column; reports the worst block by name. In sparse mode the
+// Jacobian comes from the sparse assembly (second evaluation: the recorded pattern replayed) with the friction rows
+// of the sparse solver (set_regular_separated_friction), and the dense Jacobian must equal it entry for entry.
+void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, bool sparse = false) {
   StepProblem problem(model);
+  problem.set_regular_separated_friction(sparse);
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   Eigen::VectorXd z(problem.size());
@@ -31,6 +34,15 @@ void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed) {
   Eigen::VectorXd Phi, Phi_plus, Phi_minus;
   Eigen::MatrixXd J;
   problem.Evaluate(z, &Phi, &J);
+  if (sparse) {
+    SparseJacobian J_sparse;
+    Eigen::VectorXd Phi_sparse;
+    problem.EvaluateSparse(z + Eigen::VectorXd::Constant(z.size(), 0.01), &Phi_sparse, &J_sparse);  // records
+    problem.EvaluateSparse(z, &Phi_sparse, &J_sparse);                                              // replays
+    EXPECT_EQ((Phi_sparse - Phi).lpNorm<Eigen::Infinity>(), 0.0);
+    EXPECT_EQ((Eigen::MatrixXd(J_sparse.matrix) - J).lpNorm<Eigen::Infinity>(), 0.0);
+    J = Eigen::MatrixXd(J_sparse.matrix);
+  }
   double worst = 0.0;
   int worst_row = -1, worst_col = -1;
   for (int col = 0; col < z.size(); ++col) {
@@ -68,6 +80,12 @@ TEST(StepProblemJacobian, TwoMovingBodiesBoxAndSuperellipsoid) {
 
 TEST(StepProblemJacobian, PrismWithOffsetShapeFrameAndLockedAxes) {
   ExpectJacobianMatchesFiniteDifferences(test_models::PrismOnGround(7), 4);
+}
+
+TEST(StepProblemJacobian, SparseAssemblyWithSeparatedFrictionRows) {
+  ExpectJacobianMatchesFiniteDifferences(test_models::SphereOnTwoSpheres(), 5, true);
+  ExpectJacobianMatchesFiniteDifferences(test_models::BoxAndSuperellipsoid(), 6, true);
+  ExpectJacobianMatchesFiniteDifferences(test_models::PrismOnGround(7), 7, true);
 }
 
 TEST(StepProblem, LayoutCountsUnknownsAndRowsOfEveryPair) {

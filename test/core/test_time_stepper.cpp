@@ -97,8 +97,7 @@ TEST(TimeStepper, StackOfTwoMovingSpheresCarriesBothWeights) {
   });
   EXPECT_EQ(stats.nonconverged, 0);
   for (int c = 0; c < 3; ++c) {
-    const ContactPair& p = model.pairs[c];
-    const std::string name = p.name;
+    const std::string name = model.PairName(c);
     if (name == "lower-ground") EXPECT_NEAR(forces[c], 1.5 * 9.81, 1e-6);
     else if (name == "lower-upper") EXPECT_NEAR(forces[c], 0.5 * 9.81, 1e-6);
     else EXPECT_NEAR(forces[c], 0.0, 1e-9) << name;

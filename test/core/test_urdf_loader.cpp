@@ -28,8 +28,8 @@ TEST(UrdfLoader, P3SceneHasTheScenarioParameters) {
   EXPECT_TRUE(m.bodies[m.FindBody("sphere_b")].is_fixed);
   EXPECT_DOUBLE_EQ(m.bodies[m.FindBody("sphere_b")].shape.size[0], 9.0);
   ASSERT_EQ(m.pairs.size(), 2u);
-  EXPECT_EQ(m.pairs[0].name, "ball-sphere_a");
-  EXPECT_EQ(m.pairs[1].name, "ball-sphere_b");
+  EXPECT_EQ(m.PairName(0), "ball-sphere_a");
+  EXPECT_EQ(m.PairName(1), "ball-sphere_b");
   EXPECT_DOUBLE_EQ(m.pairs[0].friction.mu, 0.2);
   EXPECT_DOUBLE_EQ(m.pairs[1].friction.e_r, 0.3);
 }
@@ -82,7 +82,7 @@ void ExpectRefused(const std::string& xml, const std::string& must_mention) {
 TEST(UrdfLoader, AcceptsTheMinimalScene) {
   const Model m = LoadSceneFromString(Scene(kSphere));
   EXPECT_EQ(m.pairs.size(), 1u);
-  EXPECT_EQ(m.pairs[0].name, "ball-ground");
+  EXPECT_EQ(m.PairName(0), "ball-ground");
 }
 
 TEST(UrdfLoader, ComputesInertiaFromTheShapeWhenThereIsNoInertial) {

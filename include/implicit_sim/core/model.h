@@ -38,7 +38,6 @@ struct ContactPair {
   int body1 = -1;
   int body2 = -1;
   FrictionParams friction;
-  std::string name;  // "<link1>-<link2>"
 };
 
 struct Model {
@@ -46,11 +45,17 @@ struct Model {
   std::vector<ContactPair> pairs;
   std::vector<int> moving_bodies;  // indices of the moving bodies, in URDF order: velocity slot k -> body index
   std::vector<int> velocity_slot;  // body index -> velocity slot, -1 for fixed bodies
+  // Pairs are listed by (lower body index i, higher index j), i ascending then j ascending; the pairs whose lower
+  // index is i are pairs[pairs_of_lower[i] .. pairs_of_lower[i + 1]). Size bodies + 1.
+  std::vector<int> pairs_of_lower;
   Vec3 gravity_W = Vec3(0.0, 0.0, -9.81);  // m/s^2
   std::string scene_name;
 
   int num_moving() const { return static_cast<int>(moving_bodies.size()); }
   int FindBody(const std::string& name) const;  // -1 if absent
+  // The pair of bodies i and j (either order), -1 if they form none (both fixed, or one has no shape).
+  int PairIndex(int i, int j) const;
+  std::string PairName(int pair) const;  // "<link1>-<link2>", body1 first
   // Builds moving_bodies, velocity_slot and one pair for every two bodies with shapes of which at least one moves.
   // `pair_friction(i, j)` gives the friction of the pair; bodies must already be filled in.
   template <typename FrictionOf>
@@ -71,7 +76,9 @@ void Model::Finalize(FrictionOf pair_friction) {
     }
   }
   pairs.clear();
+  pairs_of_lower.assign(bodies.size() + 1, 0);
   for (int i = 0; i < static_cast<int>(bodies.size()); ++i) {
+    pairs_of_lower[i] = static_cast<int>(pairs.size());
     for (int j = i + 1; j < static_cast<int>(bodies.size()); ++j) {
       if (bodies[i].is_fixed && bodies[j].is_fixed) continue;
       if (bodies[i].shape.inequalities.empty() || bodies[j].shape.inequalities.empty()) continue;
@@ -79,10 +86,10 @@ void Model::Finalize(FrictionOf pair_friction) {
       pair.body1 = bodies[i].is_fixed ? j : i;  // body1 moves
       pair.body2 = bodies[i].is_fixed ? i : j;
       pair.friction = pair_friction(pair.body1, pair.body2);
-      pair.name = bodies[pair.body1].name + "-" + bodies[pair.body2].name;
       pairs.push_back(pair);
     }
   }
+  pairs_of_lower[bodies.size()] = static_cast<int>(pairs.size());
 }
 
 }  // namespace implicit_sim

@@ -2,12 +2,21 @@
 // (DESIGN.md section 2, pitfall 8): exact generalized Jacobian, a Levenberg-Marquardt step with tiny damping scaled by
 // the merit (it survives the singular Jacobians of separated contacts and flat faces), Armijo backtracking on
 // 0.5 |Phi|^2. The workspace is sized once; Solve does not allocate.
+//
+// Sparse mode (many contacts): the Jacobian is assembled in compressed columns and the square Newton system
+// (J + delta P) dz = -Phi is solved by sparse LU (COLAMD ordering, analysed once per layout). P puts delta on the
+// diagonal entries of the normal-force and friction rows: a proximal term that keeps the system regular where
+// contact forces are redundant (a body resting on several others) while the residual, and so the solution, stays
+// exact. If the LU fails, the Levenberg-Marquardt normal equations are solved by sparse Cholesky (LDL^T) instead.
+// The sparse workspace is reused while the layout stays the same.
 #pragma once
 
 #include <string>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseLU>
 
 #include "implicit_sim/core/step_problem.h"
 
@@ -19,6 +28,7 @@ struct NewtonOptions {
   double lm_damping = 1e-12;      // LM damping = lm_damping * max(1, 0.5 |Phi|^2)
   double armijo = 1e-4;           // sufficient decrease factor
   double min_step = 1e-10;        // smallest line-search step length
+  double sparse_regularization = 1e-9;  // delta of the sparse mode (see above), in [0, 1)
   bool IsValid(std::string* error) const;
 };
 
@@ -30,14 +40,27 @@ struct NewtonResult {
 
 class SemismoothNewton {
  public:
-  explicit SemismoothNewton(int n);
-  // Solves from *z (the initial guess) in place. A non-finite residual is never accepted.
+  SemismoothNewton(int n, bool sparse);
+  bool sparse() const { return sparse_; }
+  // Solves from *z (the initial guess) in place. A non-finite residual is never accepted. The workspace follows
+  // problem->size() (it is resized, which allocates, only when the problem's layout changes).
   NewtonResult Solve(StepProblem* problem, const NewtonOptions& options, Eigen::VectorXd* z);
+  int lm_fallbacks() const { return lm_fallbacks_; }  // sparse LU failures answered by the LM normal equations
 
  private:
+  void Resize(int n);
+  void Evaluate(StepProblem* problem, const NewtonOptions& options, const Eigen::VectorXd& z, bool jacobian);
+  bool Direction(const NewtonOptions& options, double merit);  // dz_ from Phi_ and the Jacobian
+  bool sparse_;
   Eigen::MatrixXd J_, normal_;
   Eigen::VectorXd Phi_, Phi_trial_, z_trial_, rhs_, dz_;
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
+  SparseJacobian J_sparse_;
+  Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu_;
+  int lu_pattern_version_ = -1;
+  Eigen::SparseMatrix<double> normal_sparse_;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> sparse_ldlt_;
+  int lm_fallbacks_ = 0;
 };
 
 }  // namespace implicit_sim

@@ -1,7 +1,9 @@
 // Headless outputs of a run: the trajectory CSV (one row per step, t = 0 included) and the summary JSON.
 // Column names are a contract (README.md): t; per moving body B: B.x B.y B.z B.qw B.qx B.qy B.qz B.vx B.vy B.vz
-// B.wx B.wy B.wz; per pair P = <link1>-<link2>: P.gap P.fn P.ft P.mr P.slip; step.iterations step.residual
-// step.converged. Numbers are written locale-independently (shortest round-trip form, '.' as decimal point).
+// B.wx B.wy B.wz; per pair P = <link1>-<link2>: P.gap P.fn P.ft P.mr P.slip (only when every pair is in every NCP, see
+// Data::PairSelection); step.iterations step.residual step.converged. With the broad phase the contacts go to
+// contacts.csv instead, one row per touching pair per step: t,pair,gap,fn,ft,mr,slip. Numbers are written
+// locale-independently (shortest round-trip form, '.' as decimal point).
 #pragma once
 
 #include <fstream>
@@ -26,6 +28,8 @@ struct RunSummary {
   int smoothed_solves = 0;             // solves that reached the smoothing continuation
   int ipopt_solves = 0;                // Ipopt solves (primary solver or ladder rung)
   int substeps = 0;                    // step splits after failed solves
+  int broad_phase_additions = 0;       // pairs added by the end-of-step check
+  int max_pairs_in_ncp = 0;
   int max_iterations = 0;
   double max_residual = 0.0;
   double kinetic_energy_initial = 0.0; // J
@@ -36,8 +40,9 @@ struct RunSummary {
 
 class TrajectoryWriter {
  public:
-  // Throws std::runtime_error if the file cannot be written.
-  TrajectoryWriter(const std::string& path, const Model& model);
+  // Throws std::runtime_error if a file cannot be written. With pair_columns the per-pair columns are in the
+  // trajectory; otherwise contacts go to contacts_path.
+  TrajectoryWriter(const std::string& path, const Model& model, bool pair_columns, const std::string& contacts_path);
   // The t = 0 row: gaps from FindClosestPoints (closed form, or the distance oracle), forces and slip unknown (nan).
   void WriteInitial(const State& state);
   void WriteStep(const State& state, const Data& data, const StepReport& report);
@@ -45,7 +50,8 @@ class TrajectoryWriter {
  private:
   void WriteBodies(const State& state);
   const Model& model_;
-  std::ofstream out_;
+  bool pair_columns_;
+  std::ofstream out_, contacts_;
 };
 
 }  // namespace implicit_sim

@@ -33,6 +33,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 
 #include "implicit_sim/core/model.h"
 #include "implicit_sim/core/state.h"
@@ -45,6 +46,7 @@ constexpr int kA1 = 0, kA2 = 3, kN = 6, kD = 9, kSt = 10, kSo = 11, kSr = 12, kA
 }
 
 struct PairBlock {
+  int pair = -1;    // the model pair
   int offset = 0;   // index of the block in z and in the rows
   int k1 = 0;       // number of inequalities of body 1
   int k2 = 0;       // number of inequalities of body 2
@@ -56,6 +58,7 @@ struct PairBlock {
 
 // Contact quantities at the end of a step, derived from a solution z.
 struct ContactResult {
+  int pair = -1;                                     // the model pair
   Vec3 p_WA1 = Vec3::Zero(), p_WA2 = Vec3::Zero();  // closest points (m)
   Vec3 n_W = Vec3::UnitZ();                          // unit normal from body 2 towards body 1
   double gap = 0.0;                                  // signed distance d (m)
@@ -65,12 +68,31 @@ struct ContactResult {
   double slip_speed = 0.0;                           // tangential relative speed at the contact (m/s)
 };
 
+// The Jacobian in compressed sparse columns. Its pattern is recorded on the first evaluation after the active pairs
+// change; later evaluations only add values through the recorded slots (no allocation).
+struct SparseJacobian {
+  Eigen::SparseMatrix<double> matrix;
+  int pattern_version = -1;       // StepProblem::pattern_version() the pattern belongs to
+  std::vector<Eigen::Triplet<double>> recorded;  // the entries as emitted, while recording
+  std::vector<int> slot;          // per emitted entry: its index in matrix.valuePtr()
+  int cursor = 0;
+  bool recording = false;
+};
+
 class StepProblem {
  public:
-  explicit StepProblem(const Model& model);
+  // With all_pairs every model pair is in the problem; otherwise none until SetActivePairs.
+  explicit StepProblem(const Model& model, bool all_pairs = true);
 
   int size() const { return size_; }
   const std::vector<PairBlock>& blocks() const { return blocks_; }
+  // Replaces the pairs in the problem by `pairs` (model pair indices, ascending). If z_old is given (laid out for
+  // the previous pairs), *z_new receives its body part and the blocks of the pairs that stay, with their tangent axes;
+  // the blocks of new pairs are zero and their indices (into blocks()) are listed in *new_blocks.
+  void SetActivePairs(const std::vector<int>& pairs, const Eigen::VectorXd* z_old, Eigen::VectorXd* z_new,
+                      std::vector<int>* new_blocks);
+  // Changes whenever the layout (and so the sparsity pattern of the Jacobian) changes.
+  int pattern_version() const { return pattern_version_; }
 
   // Stores the start-of-step quantities (poses, velocities, world inertia) and the external wrenches
   // of the step: 6 values per moving body slot (force N, torque N m; world frame, at the centre of mass), or null.
@@ -82,6 +104,7 @@ class StepProblem {
   // a warm start stays a warm start. ResetTangentAxes picks the least aligned axis for every pair.
   void UpdateTangentAxes(Eigen::VectorXd* z);
   void ResetTangentAxes(const Eigen::VectorXd& z);
+  void ResetTangentAxis(int block, const Eigen::VectorXd& z);
   const std::vector<Vec3>& tangent_axes() const { return tangent_axis_; }
   void set_tangent_axes(const std::vector<Vec3>& axes) { tangent_axis_ = axes; }
 
@@ -95,16 +118,23 @@ class StepProblem {
   // slip speed and s = the sliding direction (sigma = 0, s = 0 is a saddle of the merit function for a sliding or
   // separated contact).
   void SeedFriction(Eigen::VectorXd* z) const;
+  void SeedFriction(int block, Eigen::VectorXd* z) const;
 
-  // The FB-reformulated residual Phi(z) and, if J is not null, its exact generalized Jacobian (n x n, dense).
+  // The FB-reformulated residual Phi(z) and, if J is not null, its exact generalized Jacobian (n x n), dense or sparse.
   void Evaluate(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J);
+  void EvaluateSparse(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, SparseJacobian* J);
+  // Adds delta (>= 0) to the Jacobian's diagonal entries of the friction rows and (delta / Fs) of the normal-force
+  // rows, never to Phi: a proximal regularization of the Newton direction for the sparse LU (see ncp_solver.h).
+  void set_jacobian_regularization(double delta) { regularization_ = delta; }
+  // Friction rows with sigma + max(d, 0) / h in place of sigma (see AddPair); off by default.
+  void set_regular_separated_friction(bool on) { regular_separated_friction_ = on; }
 
   // The largest |min(a, b)| over all complementarity pairs (in their scaled units).
   double ComplementarityError(const Eigen::VectorXd& z);
   // The largest |E_i(z)| over the equations and the largest |min(a_i, b_i(z))| over the pairs, from the raw rows.
   void RawResiduals(const Eigen::VectorXd& z, double* equations, double* complementarity);
 
-  // The contact quantities of every pair for a solution z (one entry per model pair).
+  // The contact quantities of every pair in the problem for a solution z (one entry per block, in block order).
   void Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>* out);
 
   // End-of-step pose of body b for velocities in z.
@@ -142,15 +172,21 @@ class StepProblem {
 
   void UpdateBodies(const Eigen::VectorXd& z);
   Eval EvaluateInequality(int body, int k, const Vec3& p_W) const;
-  void AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J) const;
-  void AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J) const;
+  void EvaluateAll(const Eigen::VectorXd& z, Eigen::VectorXd* Phi);
+  void AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi);
+  void AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi);
+  // Adds `block` to J at (row, col), dense or sparse (every call emits the same entries for the same layout, so that
+  // the sparse pattern recorded once stays valid). Rows of locked velocities become "velocity = 0".
+  template <typename Block>
+  void AddJ(int row, int col, const Block& block);
+  void AddJ(int row, int col, double value);
   struct ContactWrench {  // the contact force F on body 1 and the torsional moment lr about n, with derivatives
     Vec3 n, F, dF_dln, dF_dst, dF_dso;
     Mat3 dF_dn;
     double lr, dlr_dln, dlr_dsr;
   };
   void AddContactWrench(int c, int body, double sign, const Vec3& r, const ContactWrench& wrench,
-                        Eigen::VectorXd* Phi, Eigen::MatrixXd* J) const;
+                        Eigen::VectorXd* Phi);
 
   const Model& model_;
   std::vector<PairBlock> blocks_;
@@ -165,6 +201,13 @@ class StepProblem {
   bool raw_ = false;
   Eigen::VectorXd raw_scratch_;  // the raw rows, for RawResiduals
   std::vector<char> complementarity_kind_;  // per row: 0 equation, 1 complementarity, 2 normal-force complementarity
+  std::vector<char> locked_row_;             // per body row: the velocity is locked
+  double regularization_ = 0.0;
+  bool regular_separated_friction_ = false;
+  int pattern_version_ = 0;
+  // Where Evaluate writes the Jacobian (at most one non-null; both null: no Jacobian).
+  Eigen::MatrixXd* J_dense_ = nullptr;
+  SparseJacobian* J_sparse_ = nullptr;
 };
 
 }  // namespace implicit_sim

@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 
+#include "implicit_sim/core/broad_phase.h"
 #include "implicit_sim/core/model.h"
 #include "implicit_sim/core/ncp_solver.h"
 #include "implicit_sim/core/state.h"
@@ -26,6 +27,9 @@ struct StepperOptions {
   NewtonOptions newton;
   int ipopt_max_iterations = 500; // [1, 100000]
   double contact_threshold = 1e-9;  // a pair counts as an active contact when its normal force exceeds this (N)
+  // Broad phase (when Data uses one): a pair enters the NCP when the bounding spheres of its bodies, each grown by the
+  // motion possible within the step (h |v| + h |w| |offset| + |g| h^2 / 2) plus this margin, overlap. (m, [0, 10])
+  double broad_phase_margin = 0.005;
   bool IsValid(std::string* error) const;
 };
 
@@ -36,6 +40,8 @@ struct StepReport {
   int smoothed_solves = 0;      // solves that went on to a smoothing continuation after the cold start failed
   int ipopt_solves = 0;         // Ipopt solves (the primary solver, or the ladder rung after the continuation)
   int substeps = 0;             // times a (sub-)step was split into two halves after its solve failed
+  int broad_phase_additions = 0;  // pairs left out by the broad phase, found overlapping at the step end and added
+  int pairs_in_ncp = 0;         // pairs in the NCP of the (last) solve
   int iterations = 0;           // Newton iterations, all attempts
   double residual = 0.0;        // |Phi|_2 of the accepted solution (the largest over sub-steps)
   double complementarity_error = 0.0;
@@ -46,9 +52,17 @@ struct StepReport {
 class Data {
  public:
   static constexpr int kMaxSubstepDepth = 4;  // a failed step is split down to h / 16
-  explicit Data(const Model& model);
+  static constexpr int kMaxBroadPhaseRounds = 4;  // re-solves of one step after its end-of-step check added pairs
+  // kAuto: every pair in every NCP (a dense solve) for models with at most kAllPairsLimit pairs, where that is
+  // cheaper than the bookkeeping and every pair's exact gap is reported at every step; the broad phase with the
+  // sparse solve above that.
+  enum class PairSelection { kAuto, kAllPairs, kBroadPhase };
+  static constexpr int kAllPairsLimit = 16;
+  explicit Data(const Model& model, PairSelection selection = PairSelection::kAuto);
+  const bool broad_phase;
   StepProblem problem;
   SemismoothNewton solver;
+  BroadPhase broad;
   Eigen::VectorXd z;            // the last solution (warm start of the next step)
   Eigen::VectorXd z_start;      // the initial guess of the current step
   bool has_warm_start = false;
@@ -56,7 +70,15 @@ class Data {
   Eigen::VectorXd z_best;
   std::vector<Vec3> axes_warm_failed;
   std::vector<Eigen::VectorXd> z_backup;  // per sub-step depth
-  std::vector<ContactResult> contacts;  // per pair, at the end of the last step
+  std::vector<std::vector<int>> pairs_backup;  // per sub-step depth: the pairs z_backup is laid out for
+  // Broad-phase workspace.
+  std::vector<int> pairs, candidates, forced_pairs, merged, new_blocks;
+  std::vector<Pose> X_WB;
+  std::vector<double> inflation;
+  Eigen::VectorXd z_remap;
+  // The contact results of the last step: one per pair in its NCP (contacts[i].pair is the model pair). With every
+  // pair in the NCP, contacts[c] belongs to model pair c.
+  std::vector<ContactResult> contacts;
 };
 
 // Advances *state by one step of options.h. `external_wrench_W`, if given, holds 6 values per moving body slot:

@@ -1,0 +1,189 @@
+// implicit_sim_bench: speed and accuracy of the stepper on the paper scenes P1-P3 and the S1 pile, one JSON line per
+// run on stdout (see bench/README.md). Speed targets live here, never in timed tests.
+//   implicit_sim_bench                                   every case
+//   implicit_sim_bench --scenario S1 --shape ellipsoid --n 100 --duration 2 [--dt 0.005] [--seed 42]
+//   implicit_sim_bench --scenario P3 [--duration 5] [--dt 0.01] [--scenes-dir DIR]
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "implicit_sim/core/pile_scene.h"
+#include "implicit_sim/core/run_output.h"
+#include "implicit_sim/core/time_stepper.h"
+#include "implicit_sim/core/urdf_loader.h"
+
+namespace {
+using namespace implicit_sim;
+
+struct Case {
+  std::string scenario;  // P1, P2, P3, S1
+  std::string variant;   // P: the scene file; S1: <shape>_n<N>
+  double h = 0.01;       // s
+  double duration = 1.0; // s
+  std::string scene_file;
+  PileShape shape = PileShape::kSphere;
+  int n = 0;
+  unsigned seed = 42;
+};
+
+double ParseNumber(const std::string& flag, const std::string& text, double low, double high) {
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() || *end != '\0' || !(value >= low && value <= high)) {
+    throw std::invalid_argument(flag + " must be a number in [" + FormatNumber(low) + ", " + FormatNumber(high) +
+                                "], got '" + text + "'");
+  }
+  return value;
+}
+
+std::string Field(const std::string& key, const std::string& value) { return "\"" + key + "\": " + value; }
+std::string Quoted(const std::string& s) { return "\"" + s + "\""; }
+
+// Runs one case and prints its JSON line.
+void Run(const Case& c, const std::string& scenes_dir) {
+  const Model model = c.scenario == "S1"
+                          ? LoadSceneFromString(MakePileUrdf(c.n, c.shape, c.seed), "s1_" + c.variant)
+                          : LoadSceneFromFile(scenes_dir + "/" + c.scene_file);
+  StepperOptions options;
+  options.h = c.h;
+  Data data(model);
+  State state = State::Initial(model);
+  RunSummary summary;
+  summary.h = c.h;
+  summary.kinetic_energy_initial = KineticEnergy(model, state);
+  const long steps = std::lround(c.duration / c.h);
+  double iterations = 0.0;
+  for (long i = 0; i < steps; ++i) {
+    const StepReport report = Step(model, options, &state, &data);
+    if (!report.advanced) break;
+    summary.Add(report, data);
+    iterations += report.iterations;
+  }
+  summary.kinetic_energy_final = KineticEnergy(model, state);
+  const double us = summary.steps > 0 ? 1e6 * summary.wall_s / summary.steps : 0.0;
+  const std::vector<std::string> fields = {
+      Field("scenario", Quoted(c.scenario)),
+      Field("variant", Quoted(c.variant)),
+      Field("bodies", std::to_string(model.num_moving())),
+      Field("h", FormatNumber(c.h)),
+      Field("steps", std::to_string(summary.steps)),
+      Field("wall_s", FormatNumber(summary.wall_s)),
+      Field("us_per_step", FormatNumber(us)),
+      Field("real_time_factor", FormatNumber(summary.wall_s > 0 ? summary.steps * c.h / summary.wall_s : 0.0)),
+      Field("max_penetration", FormatNumber(summary.max_penetration)),
+      Field("nonconverged_steps", std::to_string(summary.nonconverged_steps + (steps - summary.steps))),
+      Field("cold_restarts", std::to_string(summary.cold_restarts)),
+      Field("smoothed_solves", std::to_string(summary.smoothed_solves)),
+      Field("ipopt_solves", std::to_string(summary.ipopt_solves)),
+      Field("substeps", std::to_string(summary.substeps)),
+      Field("broad_phase_additions", std::to_string(summary.broad_phase_additions)),
+      Field("lm_fallbacks", std::to_string(data.solver.lm_fallbacks())),
+      Field("max_pairs_in_ncp", std::to_string(summary.max_pairs_in_ncp)),
+      Field("mean_iterations", FormatNumber(summary.steps > 0 ? iterations / summary.steps : 0.0)),
+      Field("kinetic_energy_initial", FormatNumber(summary.kinetic_energy_initial)),
+      Field("kinetic_energy_final", FormatNumber(summary.kinetic_energy_final)),
+  };
+  std::string line = "{";
+  for (size_t i = 0; i < fields.size(); ++i) line += (i ? ", " : "") + fields[i];
+  std::cout << line << "}" << std::endl;
+}
+
+std::vector<Case> AllCases() {
+  std::vector<Case> cases = {
+      {"P1", "p1_disc_rolling", 0.01, 5.0, "p1_disc_rolling.urdf"},
+      {"P1", "p1_ngon100", 0.01, 5.0, "p1_ngon100.urdf"},
+      {"P2", "p2_sphere_spinning", 0.07, 1.4, "p2_sphere_spinning.urdf"},
+      {"P2", "p2_sphere_spinning", 0.01, 1.4, "p2_sphere_spinning.urdf"},
+      {"P3", "p3_sphere_on_two_spheres", 0.01, 5.0, "p3_sphere_on_two_spheres.urdf"},
+  };
+  for (PileShape shape : {PileShape::kSphere, PileShape::kEllipsoid}) {
+    for (int n : {10, 100, 1000}) {
+      Case c;
+      c.scenario = "S1";
+      c.shape = shape;
+      c.n = n;
+      c.h = 0.005;
+      c.duration = 2.0;
+      c.variant = std::string(shape == PileShape::kSphere ? "sphere" : "ellipsoid") + "_n" + std::to_string(n);
+      cases.push_back(c);
+    }
+  }
+  return cases;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const char* usage =
+      "usage: implicit_sim_bench [--scenario P1|P2|P3|S1] [--shape sphere|ellipsoid] [--n N] [--seed S] "
+      "[--duration T] [--dt H] [--scenes-dir DIR]";
+  std::map<std::string, std::string> values;
+  for (int i = 1; i < argc; ++i) {
+    const std::string flag = argv[i];
+    const bool known = flag == "--scenario" || flag == "--shape" || flag == "--n" || flag == "--seed" ||
+                       flag == "--duration" || flag == "--dt" || flag == "--scenes-dir";
+    if (!known || i + 1 >= argc) {
+      std::cerr << "implicit_sim_bench: bad argument '" << flag << "'\n" << usage << "\n";
+      return 2;
+    }
+    values[flag] = argv[++i];
+  }
+  const std::string scenes_dir = values.count("--scenes-dir") ? values["--scenes-dir"] : IMPLICIT_SIM_SCENES_DIR;
+  std::vector<Case> cases;
+  try {
+    if (!values.count("--scenario")) {
+      if (values.size() > (values.count("--scenes-dir") ? 1u : 0u)) {
+        throw std::invalid_argument("--shape, --n, --seed, --duration and --dt need --scenario");
+      }
+      cases = AllCases();
+    } else {
+      const std::string scenario = values["--scenario"];
+      Case c;
+      c.scenario = scenario;
+      if (scenario == "S1") {
+        const std::string shape = values.count("--shape") ? values["--shape"] : "sphere";
+        if (shape != "sphere" && shape != "ellipsoid") {
+          throw std::invalid_argument("--shape must be sphere or ellipsoid, got '" + shape + "'");
+        }
+        c.shape = shape == "sphere" ? PileShape::kSphere : PileShape::kEllipsoid;
+        c.n = values.count("--n") ? static_cast<int>(ParseNumber("--n", values["--n"], 1, 100000)) : 100;
+        if (values.count("--n") && std::to_string(c.n) != values["--n"]) {
+          throw std::invalid_argument("--n must be an integer in [1, 100000], got '" + values["--n"] + "'");
+        }
+        c.seed = values.count("--seed") ? static_cast<unsigned>(ParseNumber("--seed", values["--seed"], 0, 4e9)) : 42;
+        c.h = 0.005;
+        c.duration = 2.0;
+        c.variant = shape + "_n" + std::to_string(c.n);
+      } else {
+        bool found = false;
+        for (const Case& known : AllCases()) {
+          if (known.scenario == scenario && !found) {
+            c = known;
+            found = true;
+          }
+        }
+        if (!found) throw std::invalid_argument("--scenario must be P1, P2, P3 or S1, got '" + scenario + "'");
+        if (values.count("--shape") || values.count("--n") || values.count("--seed")) {
+          throw std::invalid_argument("--shape, --n and --seed apply to --scenario S1 only");
+        }
+      }
+      if (values.count("--duration")) c.duration = ParseNumber("--duration", values["--duration"], 1e-6, 1e6);
+      if (values.count("--dt")) c.h = ParseNumber("--dt", values["--dt"], 1e-6, 1.0);
+      cases.push_back(c);
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "implicit_sim_bench: " << e.what() << "\n" << usage << "\n";
+    return 2;
+  }
+  try {
+    for (const Case& c : cases) Run(c, scenes_dir);
+  } catch (const std::exception& e) {
+    std::cerr << "implicit_sim_bench: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
