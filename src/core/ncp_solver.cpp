@@ -66,14 +66,9 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit) {
     return dz_.allFinite();
   }
   const Eigen::SparseMatrix<double>& J = J_sparse_.matrix;
-  if (lu_pattern_version_ != J_sparse_.pattern_version) {
-    lu_.analyzePattern(J);
-    lu_pattern_version_ = J_sparse_.pattern_version;
-  }
-  lu_.factorize(J);
-  if (lu_.info() == Eigen::Success) {
-    dz_ = lu_.solve(-Phi_);
-    if (dz_.allFinite()) return true;
+  if (lu_.Factorize(J, J_sparse_.pattern_version)) {
+    dz_ = -Phi_;
+    if (lu_.Solve(&dz_) && dz_.allFinite()) return true;
   }
   // The LU failed (a structurally singular Jacobian): the Levenberg-Marquardt normal equations instead.
   ++lm_fallbacks_;

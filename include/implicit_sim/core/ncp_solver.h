@@ -4,7 +4,7 @@
 // 0.5 |Phi|^2. The workspace is sized once; Solve does not allocate.
 //
 // Sparse mode (many contacts): the Jacobian is assembled in compressed columns and the square Newton system
-// (J + delta P) dz = -Phi is solved by sparse LU (COLAMD ordering, analysed once per layout). P puts delta on the
+// (J + delta P) dz = -Phi is solved by sparse LU (KLU, see sparse_lu.h). P puts delta on the
 // diagonal entries of the normal-force and friction rows: a proximal term that keeps the system regular where
 // contact forces are redundant (a body resting on several others) while the residual, and so the solution, stays
 // exact. If the LU fails, the Levenberg-Marquardt normal equations are solved by sparse Cholesky (LDL^T) instead.
@@ -16,8 +16,8 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/SparseCholesky>
-#include <Eigen/SparseLU>
 
+#include "implicit_sim/core/sparse_lu.h"
 #include "implicit_sim/core/step_problem.h"
 
 namespace implicit_sim {
@@ -56,8 +56,7 @@ class SemismoothNewton {
   Eigen::VectorXd Phi_, Phi_trial_, z_trial_, rhs_, dz_;
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
   SparseJacobian J_sparse_;
-  Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu_;
-  int lu_pattern_version_ = -1;
+  SparseLu lu_;
   Eigen::SparseMatrix<double> normal_sparse_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> sparse_ldlt_;
   int lm_fallbacks_ = 0;
