@@ -3,15 +3,14 @@
 
 #include <gtest/gtest.h>
 
+#include "implicit_sim/core/pile_scene.h"
 #include "scenario_runner.h"
 
 namespace implicit_sim {
 namespace {
 
 // Runs `steps` steps with Newton, then solves the next step with both solvers from the same warm start.
-void ExpectSolversAgree(const std::string& scene, double h, int steps) {
-  SCOPED_TRACE(scene);
-  const Model model = LoadSceneFromFile(testing_support::ScenePath(scene));
+void ExpectSolversAgree(const Model& model, double h, int steps) {
   StepperOptions options;
   options.h = h;
   Data data(model);
@@ -33,6 +32,16 @@ void ExpectSolversAgree(const std::string& scene, double h, int steps) {
   for (const PairBlock& blk : data.problem.blocks()) {  // the normal forces
     EXPECT_NEAR(ipopt[blk.ln()], newton[blk.ln()], 1e-4 * std::max(1.0, std::abs(newton[blk.ln()])));
   }
+}
+
+void ExpectSolversAgree(const std::string& scene, double h, int steps) {
+  SCOPED_TRACE(scene);
+  ExpectSolversAgree(LoadSceneFromFile(testing_support::ScenePath(scene)), h, steps);
+}
+
+TEST(IpoptNcp, AgreesWithNewtonOnASmallPile) {  // broad phase and sparse Newton; spheres landed on the floor
+  const Model model = LoadSceneFromString(MakePileUrdf(10, PileShape::kSphere), "pile");
+  ExpectSolversAgree(model, 0.005, 30);
 }
 
 TEST(IpoptNcp, AgreesWithNewtonOnTheRollingDisc) { ExpectSolversAgree("p1_disc_rolling.urdf", 0.01, 20); }
