@@ -3,6 +3,7 @@
 //   implicit_sim_bench                                   every case
 //   implicit_sim_bench --scenario S1 --shape ellipsoid --n 100 --duration 2 [--dt 0.005] [--seed 42]
 //   implicit_sim_bench --scenario P3 [--duration 5] [--dt 0.01] [--scenes-dir DIR]
+// --max-wall S (default 300 s of solver time per run) stops a run early; its line then says "completed": false.
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -44,7 +45,7 @@ std::string Field(const std::string& key, const std::string& value) { return "\"
 std::string Quoted(const std::string& s) { return "\"" + s + "\""; }
 
 // Runs one case and prints its JSON line.
-void Run(const Case& c, const std::string& scenes_dir) {
+void Run(const Case& c, const std::string& scenes_dir, double max_wall_s) {
   const Model model = c.scenario == "S1"
                           ? LoadSceneFromString(MakePileUrdf(c.n, c.shape, c.seed), "s1_" + c.variant)
                           : LoadSceneFromFile(scenes_dir + "/" + c.scene_file);
@@ -62,6 +63,7 @@ void Run(const Case& c, const std::string& scenes_dir) {
     if (!report.advanced) break;
     summary.Add(report, data);
     iterations += report.iterations;
+    if (summary.wall_s > max_wall_s) break;
   }
   summary.kinetic_energy_final = KineticEnergy(model, state);
   const double us = summary.steps > 0 ? 1e6 * summary.wall_s / summary.steps : 0.0;
@@ -71,11 +73,13 @@ void Run(const Case& c, const std::string& scenes_dir) {
       Field("bodies", std::to_string(model.num_moving())),
       Field("h", FormatNumber(c.h)),
       Field("steps", std::to_string(summary.steps)),
+      Field("completed", summary.steps == steps ? "true" : "false"),
+      Field("simulated_s", FormatNumber(summary.steps * c.h)),
       Field("wall_s", FormatNumber(summary.wall_s)),
       Field("us_per_step", FormatNumber(us)),
       Field("real_time_factor", FormatNumber(summary.wall_s > 0 ? summary.steps * c.h / summary.wall_s : 0.0)),
       Field("max_penetration", FormatNumber(summary.max_penetration)),
-      Field("nonconverged_steps", std::to_string(summary.nonconverged_steps + (steps - summary.steps))),
+      Field("nonconverged_steps", std::to_string(summary.nonconverged_steps)),
       Field("cold_restarts", std::to_string(summary.cold_restarts)),
       Field("smoothed_solves", std::to_string(summary.smoothed_solves)),
       Field("ipopt_solves", std::to_string(summary.ipopt_solves)),
@@ -120,12 +124,12 @@ std::vector<Case> AllCases() {
 int main(int argc, char** argv) {
   const char* usage =
       "usage: implicit_sim_bench [--scenario P1|P2|P3|S1] [--shape sphere|ellipsoid] [--n N] [--seed S] "
-      "[--duration T] [--dt H] [--scenes-dir DIR]";
+      "[--duration T] [--dt H] [--max-wall S] [--scenes-dir DIR]";
   std::map<std::string, std::string> values;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
     const bool known = flag == "--scenario" || flag == "--shape" || flag == "--n" || flag == "--seed" ||
-                       flag == "--duration" || flag == "--dt" || flag == "--scenes-dir";
+                       flag == "--duration" || flag == "--dt" || flag == "--scenes-dir" || flag == "--max-wall";
     if (!known || i + 1 >= argc) {
       std::cerr << "implicit_sim_bench: bad argument '" << flag << "'\n" << usage << "\n";
       return 2;
@@ -134,9 +138,11 @@ int main(int argc, char** argv) {
   }
   const std::string scenes_dir = values.count("--scenes-dir") ? values["--scenes-dir"] : IMPLICIT_SIM_SCENES_DIR;
   std::vector<Case> cases;
+  double max_wall_s = 300.0;
   try {
+    if (values.count("--max-wall")) max_wall_s = ParseNumber("--max-wall", values["--max-wall"], 1e-3, 1e7);
     if (!values.count("--scenario")) {
-      if (values.size() > (values.count("--scenes-dir") ? 1u : 0u)) {
+      if (values.size() > values.count("--scenes-dir") + values.count("--max-wall")) {
         throw std::invalid_argument("--shape, --n, --seed, --duration and --dt need --scenario");
       }
       cases = AllCases();
@@ -180,7 +186,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    for (const Case& c : cases) Run(c, scenes_dir);
+    for (const Case& c : cases) Run(c, scenes_dir, max_wall_s);
   } catch (const std::exception& e) {
     std::cerr << "implicit_sim_bench: " << e.what() << "\n";
     return 1;

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "implicit_sim/core/support.h"
 #include "implicit_sim/core/urdf_loader.h"
 
 namespace implicit_sim {
@@ -12,7 +13,7 @@ namespace {
 
 TEST(PileScene, LayoutFollowsTheScenarioAndSpheresStartApart) {
   for (PileShape shape : {PileShape::kSphere, PileShape::kEllipsoid}) {
-    const Model model = LoadSceneFromString(MakePileUrdf(100, shape), "pile");
+    const Model model = LoadSceneFromString(MakePileUrdf(100, shape, 42, false), "pile");  // the scenario's layout
     ASSERT_EQ(model.num_moving(), 100);
     ASSERT_EQ(model.bodies.size(), 105u);  // + floor and four walls
     std::mt19937 rng(42);
@@ -44,6 +45,37 @@ TEST(PileScene, LayoutFollowsTheScenarioAndSpheresStartApart) {
     }
   }
   EXPECT_THROW(MakePileUrdf(0, PileShape::kSphere), std::invalid_argument);
+}
+
+TEST(PileScene, EllipsoidRowsAreSpreadToTheNearestNonOverlappingLayout) {
+  const Model layout = LoadSceneFromString(MakePileUrdf(100, PileShape::kEllipsoid, 42, false), "layout");
+  const Model spread = LoadSceneFromString(MakePileUrdf(100, PileShape::kEllipsoid), "spread");
+  int overlapping_before = 0, overlapping_after = 0;
+  double max_shift = 0.0;
+  for (int i = 0; i < 100; ++i) {
+    const Body& a = layout.bodies[layout.FindBody("body_" + std::to_string(i))];
+    const Body& b = spread.bodies[spread.FindBody("body_" + std::to_string(i))];
+    const Vec3 shift = b.X_WB0.translation() - a.X_WB0.translation();
+    max_shift = std::max(max_shift, shift.norm());
+    EXPECT_EQ(shift.y(), 0.0);
+    EXPECT_EQ(shift.z(), 0.0);
+    EXPECT_TRUE(b.X_WB0.linear().isApprox(Mat3::Identity(), 1e-15));
+    EXPECT_LT(std::abs(b.X_WB0.translation().x()), 0.5 - 0.06);  // inside the walls
+    if (i % 8 == 0) continue;
+    // x-neighbours in a row, by the independent distance oracle (negative distance: overlap).
+    for (const auto& [model, count] : {std::make_pair(&layout, &overlapping_before),
+                                       std::make_pair(&spread, &overlapping_after)}) {
+      const Body& left = model->bodies[model->FindBody("body_" + std::to_string(i - 1))];
+      const Body& right = model->bodies[model->FindBody("body_" + std::to_string(i))];
+      const ClosestPointsResult cp = FindClosestPoints(left.shape, left.X_WB0, right.shape, right.X_WB0);
+      *count += cp.distance < 1e-6;
+    }
+    EXPECT_GE(b.X_WB0.translation().x() - spread.bodies[spread.FindBody("body_" + std::to_string(i - 1))]
+                                              .X_WB0.translation().x(), 0.12 - 1e-12);
+  }
+  EXPECT_GT(overlapping_before, 10);
+  EXPECT_EQ(overlapping_after, 0);
+  EXPECT_LT(max_shift, 0.02);
 }
 
 }  // namespace
