@@ -1,11 +1,14 @@
 // "No allocation inside the step once warm": counts heap allocations (a replaced global operator new) while a warm
 // stepper runs P3, including the contact transitions and separations.
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <new>
 #include <string>
 
 #include <gtest/gtest.h>
+
+#include "implicit_sim/core/pile_scene.h"
 
 #include "scenario_runner.h"
 
@@ -45,6 +48,29 @@ TEST(Allocation, AWarmStepAllocatesNothing) {
     ASSERT_EQ(cold, 0) << "a cold restart (which calls Ipopt) would allocate";
     EXPECT_EQ(g_allocations.load() - before, 0);
   }
+}
+
+TEST(Allocation, AWarmSparseStepWithAnUnchangedPairSetAllocatesNothing) {
+  // Broad phase, sparse Jacobian and KLU: once the pile rests, the pairs in the NCP stay the same and a step reuses
+  // the recorded pattern, the symbolic analysis and every buffer.
+  const Model model = LoadSceneFromString(MakePileUrdf(10, PileShape::kSphere), "pile");
+  Data data(model);
+  ASSERT_TRUE(data.broad_phase);
+  State state = State::Initial(model);
+  StepperOptions options;
+  options.h = 0.005;
+  for (int i = 0; i < 200; ++i) ASSERT_TRUE(Step(model, options, &state, &data).converged);  // land and settle
+  // A downward push that changes every step (a sideways one would roll the spheres), so that every step iterates.
+  Eigen::VectorXd wrench = Eigen::VectorXd::Zero(6 * model.num_moving());
+  const long before = g_allocations.load();
+  int iterations = 0;
+  for (int i = 0; i < 100; ++i) {
+    for (int k = 0; k < model.num_moving(); ++k) wrench[6 * k + 2] = -0.5 * (1.0 + std::sin(0.3 * i + k));
+    iterations += Step(model, options, &state, &data, &wrench).iterations;
+  }
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_GE(iterations, 100);
+  EXPECT_GE(data.problem.blocks().size(), 10u);  // every sphere on the floor, in the NCP
 }
 
 }  // namespace
