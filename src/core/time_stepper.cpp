@@ -88,13 +88,28 @@ void WriteState(const Model& model, const StepProblem& problem, const Eigen::Vec
 
 // Fills the contact block of pair c in z from closest points at the configuration `state` (closed form, or the
 // distance oracle) for a cold start, with multipliers consistent with the normal and a normal force guess.
-void SeedPair(const Model& model, const State& state, int c, const StepProblem& problem, Eigen::VectorXd* z) {
+// Closest points without the oracle, for a pair entering the NCP through the broad phase (apart by about the
+// margin): the closed form where there is one, otherwise the support points of both bodies along the line of their
+// shape origins (exact for spheres, a fair guess for convex bodies near each other).
+ClosestPointsResult QuickClosestPoints(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2,
+                                       const Pose& X_WB2) {
+  ClosestPointsResult cp;
+  if (ClosedFormClosestPoints(shape1, X_WB1, shape2, X_WB2, &cp)) return cp;
+  const Vec3 u = ((X_WB1 * shape1.X_BS).translation() - (X_WB2 * shape2.X_BS).translation()).normalized();
+  cp.solved = u.allFinite() && SupportPoint(shape1, X_WB1, -u, &cp.p_W1) && SupportPoint(shape2, X_WB2, u, &cp.p_W2);
+  if (cp.solved) cp.distance = std::max(0.0, u.dot(cp.p_W1 - cp.p_W2));
+  return cp;
+}
+
+void SeedPair(const Model& model, const State& state, int c, const StepProblem& problem, Eigen::VectorXd* z,
+              bool use_oracle = true) {
   const PairBlock& blk = problem.blocks()[c];
   const ContactPair& pair = model.pairs[blk.pair];
   const Body& body1 = model.bodies[pair.body1];
   const Body& body2 = model.bodies[pair.body2];
   const Pose X_WB1 = state.X_WB(model, pair.body1), X_WB2 = state.X_WB(model, pair.body2);
-  const ClosestPointsResult cp = FindClosestPoints(body1.shape, X_WB1, body2.shape, X_WB2);
+  const ClosestPointsResult cp = use_oracle ? FindClosestPoints(body1.shape, X_WB1, body2.shape, X_WB2)
+                                            : QuickClosestPoints(body1.shape, X_WB1, body2.shape, X_WB2);
   Vec3 p1 = cp.p_W1, p2 = cp.p_W2;
   if (!cp.solved || !p1.allFinite() || !p2.allFinite()) {  // fall back to the body origins
     p1 = X_WB1.translation();
@@ -126,7 +141,7 @@ void SetPairs(const Model& model, const State& state, const std::vector<int>& pa
   problem.SetActivePairs(pairs, &data->z, &data->z_remap, &data->new_blocks);
   data->z.swap(data->z_remap);
   for (int c : data->new_blocks) {
-    SeedPair(model, state, c, problem, &data->z);
+    SeedPair(model, state, c, problem, &data->z, /*use_oracle=*/false);
     problem.ResetTangentAxis(c, data->z);
     problem.SeedFriction(c, &data->z);
   }
