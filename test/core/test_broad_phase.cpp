@@ -87,8 +87,7 @@ TEST(BroadPhase, SparseSolveWithTheBroadPhaseFollowsTheDenseAllPairsSolve) {
     max_difference = std::max(max_difference, (a.v - b.v).cwiseAbs().maxCoeff());
   }
   EXPECT_LT(max_difference, 1e-8);
-  EXPECT_GT(b.q[2], -100.0);  // the ball has left the spheres and their pairs have left the NCP
-  EXPECT_LT(sparse.problem.blocks().size(), 2u);
+  EXPECT_LT(sparse.problem.blocks().size(), 2u);  // the ball has left the spheres: their pairs left the NCP
 }
 
 // Independent of the solver and of support.h: sphere-sphere and sphere-wall distances from the centres alone.
@@ -117,7 +116,6 @@ TEST(BroadPhase, NoPairOfASpherePileInterpenetratesAtAnyStepEnd) {
   }
   EXPECT_EQ(nonconverged, 0);
   EXPECT_LT(worst, 1e-9) << "largest interpenetration (m)";
-  EXPECT_GT(KineticEnergy(model, state), -1.0);
   EXPECT_LT(max_in_ncp, static_cast<int>(model.pairs.size()) / 5);  // the broad phase keeps far pairs out
 }
 
