@@ -51,7 +51,13 @@ std::string RunSummary::ToJson() const {
   json += "  \"max_iterations\": " + std::to_string(max_iterations) + ",\n";
   json += "  \"max_residual\": " + FormatNumber(max_residual) + ",\n";
   json += "  \"kinetic_energy_initial\": " + FormatNumber(kinetic_energy_initial) + ",\n";
-  json += "  \"kinetic_energy_final\": " + FormatNumber(kinetic_energy_final) + "\n";
+  json += "  \"kinetic_energy_final\": " + FormatNumber(kinetic_energy_final) + (pairs.empty() ? "\n" : ",\n");
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    const FrictionParams& f = pairs[i].second;
+    json += std::string(i == 0 ? "  \"pairs\": [\n" : "") + "    {\"name\": \"" + pairs[i].first + "\", \"mu\": " +
+            FormatNumber(f.mu) + ", \"e_t\": " + FormatNumber(f.e_t) + ", \"e_o\": " + FormatNumber(f.e_o) +
+            ", \"e_r\": " + FormatNumber(f.e_r) + "}" + (i + 1 < pairs.size() ? ",\n" : "\n  ]\n");
+  }
   return json + "}\n";
 }
 
@@ -73,7 +79,7 @@ TrajectoryWriter::TrajectoryWriter(const std::string& path, const Model& model, 
   for (int pair = 0; pair_columns_ && pair < static_cast<int>(model.pairs.size()); ++pair) {
     for (const char* c : {"gap", "fn", "ft", "mr", "slip"}) out_ << ',' << model.PairName(pair) << '.' << c;
   }
-  out_ << ",step.iterations,step.residual,step.converged\n";
+  out_ << ",step.iterations,step.residual,step.converged,energy.kinetic,energy.potential\n";
 }
 
 void TrajectoryWriter::WriteBodies(const State& state) {
@@ -82,6 +88,14 @@ void TrajectoryWriter::WriteBodies(const State& state) {
     for (int i = 0; i < 7; ++i) out_ << ',' << FormatNumber(state.q[7 * k + i]);
     for (int i = 0; i < 6; ++i) out_ << ',' << FormatNumber(state.v[6 * k + i]);
   }
+}
+
+void TrajectoryWriter::WriteEnergies(const State& state) {
+  double potential = 0.0;
+  for (int k = 0; k < model_.num_moving(); ++k) {
+    potential -= model_.bodies[model_.moving_bodies[k]].mass * model_.gravity_W.dot(state.q.segment<3>(7 * k));
+  }
+  out_ << ',' << FormatNumber(KineticEnergy(model_, state)) << ',' << FormatNumber(potential) << '\n';
 }
 
 void TrajectoryWriter::WriteInitial(const State& state) {
@@ -93,7 +107,8 @@ void TrajectoryWriter::WriteInitial(const State& state) {
                              model_.bodies[pair.body2].shape, state.X_WB(model_, pair.body2));
     out_ << ',' << FormatNumber(cp.solved ? cp.distance : std::nan("")) << ",nan,nan,nan,nan";
   }
-  out_ << ",0,0,1\n";
+  out_ << ",0,0,1";
+  WriteEnergies(state);
 }
 
 void TrajectoryWriter::WriteStep(const State& state, const Data& data, const StepReport& report) {
@@ -109,8 +124,8 @@ void TrajectoryWriter::WriteStep(const State& state, const Data& data, const Ste
         << FormatNumber(c.slip_speed);
     if (!pair_columns_) out << '\n';
   }
-  out_ << ',' << report.iterations << ',' << FormatNumber(report.residual) << ',' << (report.converged ? 1 : 0)
-       << '\n';
+  out_ << ',' << report.iterations << ',' << FormatNumber(report.residual) << ',' << (report.converged ? 1 : 0);
+  WriteEnergies(state);
 }
 
 }  // namespace implicit_sim

@@ -108,6 +108,9 @@ int main(int argc, char** argv) {
     summary.scene = model.scene_name;
     summary.h = options.h;
     summary.kinetic_energy_initial = KineticEnergy(model, state);
+    for (int pair = 0; !data.broad_phase && pair < static_cast<int>(model.pairs.size()); ++pair) {
+      summary.pairs.emplace_back(model.PairName(pair), model.pairs[pair].friction);
+    }
     writer.WriteInitial(state);
     const long steps = std::lround(args.duration / options.h);
     for (long i = 0; i < steps; ++i) {

@@ -5,6 +5,7 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 
@@ -44,7 +45,7 @@ TEST(RunnerCli, WritesTrajectoryAndSummaryWithTheDocumentedColumns) {
             "t,ball.x,ball.y,ball.z,ball.qw,ball.qx,ball.qy,ball.qz,ball.vx,ball.vy,ball.vz,ball.wx,ball.wy,ball.wz,"
             "ball-sphere_a.gap,ball-sphere_a.fn,ball-sphere_a.ft,ball-sphere_a.mr,ball-sphere_a.slip,"
             "ball-sphere_b.gap,ball-sphere_b.fn,ball-sphere_b.ft,ball-sphere_b.mr,ball-sphere_b.slip,"
-            "step.iterations,step.residual,step.converged");
+            "step.iterations,step.residual,step.converged,energy.kinetic,energy.potential");
   int rows = 0;
   while (std::getline(csv, line)) ++rows;
   EXPECT_EQ(rows, 6);  // t = 0 and 5 steps
@@ -52,9 +53,29 @@ TEST(RunnerCli, WritesTrajectoryAndSummaryWithTheDocumentedColumns) {
   std::stringstream summary;
   summary << summary_file.rdbuf();
   for (const char* key : {"\"scene\": \"p3_sphere_on_two_spheres\"", "\"h\": 0.01", "\"steps\": 5", "\"wall_s\"",
-                          "\"us_per_step\"", "\"max_penetration\"", "\"nonconverged_steps\": 0"}) {
+                          "\"us_per_step\"", "\"max_penetration\"", "\"nonconverged_steps\": 0",
+                          "{\"name\": \"ball-sphere_a\", \"mu\": 0.2, \"e_t\": 1, \"e_o\": 1, \"e_r\": 0.3}"}) {
     EXPECT_NE(summary.str().find(key), std::string::npos) << key << " missing in\n" << summary.str();
   }
+}
+
+// The plot tool (scripts/plot_run.py, python3-matplotlib) draws every body, every contact and the energy of a run as
+// valid PNG images with content, and refuses a directory without a run.
+TEST(RunnerCli, PlotToolDrawsEveryBodyContactAndTheEnergy) {
+  const std::string out = TempDir("plots");
+  ASSERT_EQ(RunRunner("--scene " + testing_support::ScenePath("p3_sphere_on_two_spheres.urdf") +
+                      " --duration 1 --dt 0.01 --out " + out),
+            0);
+  const std::string plot = "/usr/bin/python3 " + std::string(IMPLICIT_SIM_SOURCE_DIR) + "/scripts/plot_run.py ";
+  ASSERT_EQ(std::system((plot + out + " --svg > /dev/null 2>&1").c_str()), 0);
+  for (const char* name : {"body_ball", "contact_ball-sphere_a", "contact_ball-sphere_b", "energy"}) {
+    std::ifstream png(out + "/plots/" + name + ".png", std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(png)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << name;
+    EXPECT_GT(bytes.size(), 20000u) << name << ": too small to hold the curves";
+    EXPECT_TRUE(Exists(out + "/plots/" + name + ".svg")) << name;
+  }
+  EXPECT_NE(std::system((plot + TempDir("no_run") + " > /dev/null 2>&1").c_str()), 0);
 }
 
 TEST(RunnerCli, RefusesBadArgumentsAndWritesNothing) {
