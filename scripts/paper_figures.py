@@ -1,0 +1,252 @@
+#!/usr/bin/python3
+"""Regenerates the paper's figures from our own runs, next to the exact or reference solutions, and checks them.
+
+Usage: paper_figures.py OUTDIR --runner PATH [--quick]
+Runs the headless runner on the paper's scenes and writes into OUTDIR:
+  fig1a_p1_energy_ngons.png    P1: kinetic energy of the smooth disc and of N-gon discs (N = 10 ... 1000), h = 0.01
+  fig1b_p1_energy_1000gon.png  P1: the 1000-gon at h = 0.01, 0.005, 0.001, 0.0005 and the smooth disc
+  fig3_p2_velocities.png       P2: spin and the other velocity components (h = 0.07) with the exact solution
+  fig4_p2_friction.png         P2: torsional moment and tangential friction (h = 0.07) with the exact solution
+  fig6_p3_velocities.png       P3: velocity and angular velocity with the reference
+  fig7_p3_contact_a.png, fig8_p3_contact_b.png   P3 per contact: normal force, mu * normal force, friction
+                               magnitude and slip speed with the reference
+  ellipsoid_on_ellipsoid.png   an ellipsoid toppling down a fixed ellipsoid (no closed-form distance): gap, energy
+Prints, per figure, the numbers it shows against the reference with PASS/FAIL, and exits 1 if a check fails.
+The 1000-gon sweep of Fig. 1(b) covers 1 s (5 s in the paper): each of its steps solves a dense block of about 1000
+unknowns. --quick shortens the horizons (P1 to 1 s, the 1000-gon sweep to 0.05 s, the ellipsoid to 1 s) for tests."""
+import argparse
+import csv
+import json
+import os
+import subprocess
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+REFERENCE = os.path.join(REPO, "test", "data", "reference")
+FAILURES = []
+
+
+def check(name, value, expected, ok):
+    status = "PASS" if ok else "FAIL"
+    if not ok:
+        FAILURES.append(name)
+    print(f"  [{status}] {name}: {value} (expected {expected})")
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    return {key: [float(r[key]) for r in rows] for key in rows[0]}
+
+
+def run(runner, scene, duration, h, work):
+    out = os.path.join(work, f"{os.path.splitext(scene)[0]}_h{h:g}_T{duration:g}")
+    subprocess.run([runner, "--scene", os.path.join(REPO, "scenes", scene), "--duration", str(duration), "--dt",
+                    str(h), "--out", out], check=True, stdout=subprocess.DEVNULL)
+    with open(os.path.join(out, "summary.json")) as f:
+        return read_csv(os.path.join(out, "trajectory.csv")), json.load(f)
+
+
+def save(fig, out_dir, name):
+    fig.tight_layout()
+    path = os.path.join(out_dir, name)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    print(f"wrote {path}")
+
+
+def figure_1(runner, out_dir, work, quick):
+    T = 1.0 if quick else 5.0
+    print("Fig. 1(a): P1 kinetic energy, smooth disc and N-gons, h = 0.01")
+    fig, axis = plt.subplots(figsize=(8, 4.5))
+    ratios = {}
+    for label, scene in [("smooth", "p1_disc_rolling.urdf")] + [(f"{n}-gon", f"p1_ngon{n}.urdf")
+                                                                 for n in (10, 20, 40, 100, 1000)]:
+        run_, _ = run(runner, scene, T, 0.01, work)
+        ke = run_["energy.kinetic"]
+        ratios[label] = ke[-1] / ke[0]
+        axis.plot(run_["t"], ke, label=f"{label}: KE(T)/KE0 = {ratios[label]:.4f}")
+    axis.set_xlabel("t (s)")
+    axis.set_ylabel("kinetic energy (J)")
+    axis.set_title(f"P1 rolling disc, h = 0.01 s: the smooth implicit disc keeps its energy (exact: 6.75 J)")
+    axis.grid(True, alpha=0.3)
+    axis.legend(fontsize=8)
+    save(fig, out_dir, "fig1a_p1_energy_ngons.png")
+    check("smooth disc |KE(T)/KE0 - 1|", f"{abs(ratios['smooth'] - 1):.1e}", "< 1e-9", abs(ratios["smooth"] - 1) < 1e-9)
+    order = [ratios[f"{n}-gon"] for n in (10, 20, 40, 100, 1000)]
+    check("N-gon KE(T)/KE0 for N = 10, 20, 40, 100, 1000", ", ".join(f"{r:.4f}" for r in order),
+          "increasing with N towards the smooth disc's 1",
+          all(a < b for a, b in zip(order, order[1:])) and order[-1] <= ratios["smooth"] + 1e-3)
+
+    print("Fig. 1(b): the 1000-gon at four time steps and the smooth disc")
+    # 1000 half-spaces make one dense block of about 1000 unknowns: 0.1-0.3 s a step, so this sweep is 1 s long.
+    T = 0.05 if quick else 1.0
+    fig, axis = plt.subplots(figsize=(8, 4.5))
+    smooth, _ = run(runner, "p1_disc_rolling.urdf", T, 0.01, work)
+    axis.plot(smooth["t"], smooth["energy.kinetic"], "k", label="smooth disc, h = 0.01")
+    gains = []
+    for h in (0.01, 0.005, 0.001, 0.0005):
+        run_, _ = run(runner, "p1_ngon1000.urdf", T, h, work)
+        ke = run_["energy.kinetic"]
+        total = [k + p for k, p in zip(ke, run_["energy.potential"])]
+        gains.append(max(total) / total[0] - 1)
+        axis.plot(run_["t"], ke, label=f"1000-gon, h = {h:g}: KE(T)/KE0 = {ke[-1] / ke[0]:.4f}")
+    axis.set_xlabel("t (s)")
+    axis.set_ylabel("kinetic energy (J)")
+    axis.set_title(f"P1: 1000-gon disc at four time steps ({T:g} s)")
+    axis.grid(True, alpha=0.3)
+    axis.legend(fontsize=8)
+    save(fig, out_dir, "fig1b_p1_energy_1000gon.png")
+    check("1000-gon never gains energy (max total/total0 - 1)", f"{max(gains):.1e}", "<= 1e-9", max(gains) <= 1e-9)
+
+
+def figure_3_4(runner, out_dir, work):
+    print("Figs. 3 and 4: P2 spinning sphere, h = 0.07, with the exact solution")
+    run_, _ = run(runner, "p2_sphere_spinning.urdf", 1.4, 0.07, work)
+    exact = read_csv(os.path.join(REFERENCE, "P2.csv"))
+    t = run_["t"]
+    fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    axes[0].plot(exact["t"], exact["omega_z"], "k-", label="exact")
+    axes[0].plot(t, run_["ball.wz"], "o", ms=4, label="implicit_sim, h = 0.07")
+    axes[0].set_ylabel("spin w_z (rad/s)")
+    for c in ("vx", "vy", "vz", "wx", "wy"):
+        axes[1].plot(t, run_[f"ball.{c}"], label=c)
+    axes[1].set_ylabel("other velocities (m/s, rad/s)")
+    axes[1].set_xlabel("t (s)")
+    for axis in axes:
+        axis.grid(True, alpha=0.3)
+        axis.legend(fontsize=8)
+    axes[0].set_title("P2 (paper Fig. 3): the spin decays linearly and stops; nothing else moves")
+    save(fig, out_dir, "fig3_p2_velocities.png")
+    slope = (run_["ball.wz"][10] - run_["ball.wz"][0]) / (t[10] - t[0])
+    stop = next(ti for ti, w in zip(t, run_["ball.wz"]) if abs(w) < 1e-9)
+    check("spin slope over 0-0.7 s (rad/s^2)", f"{slope:.6f}", "-1.962000", abs(slope + 1.962) < 1e-6)
+    check("first step time with zero spin (s)", f"{stop:.2f}", "1.05 (exact stop 1.00 s, h = 0.07)", abs(stop - 1.05) < 1e-9)
+    others = max(abs(v) for c in ("vx", "vy", "vz", "wx", "wy") for v in run_[f"ball.{c}"])
+    check("largest other velocity", f"{others:.1e}", "< 1e-8", others < 1e-8)
+
+    fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    axes[0].plot(exact["t"], [abs(m) for m in exact["m_torsion"]], "k-", label="exact |torsional moment|")
+    axes[0].plot(t[1:], [abs(m) for m in run_["ball-ground.mr"][1:]], "o", ms=4, label="implicit_sim")
+    axes[0].set_ylabel("torsional moment (N m)")
+    axes[1].plot(exact["t"], exact["f_t"], "k-", label="exact")
+    axes[1].plot(t[1:], run_["ball-ground.ft"][1:], "o", ms=4, label="implicit_sim")
+    axes[1].set_ylabel("tangential friction (N)")
+    axes[1].set_xlabel("t (s)")
+    for axis in axes:
+        axis.grid(True, alpha=0.3)
+        axis.legend(fontsize=8)
+    axes[0].set_title("P2 (paper Fig. 4): torsional friction mu e_r m g while spinning, then 0")
+    save(fig, out_dir, "fig4_p2_friction.png")
+    moment = abs(run_["ball-ground.mr"][1])
+    check("torsional moment while spinning (N m)", f"{moment:.5f}", "0.78480", abs(moment - 0.7848) < 1e-6)
+
+
+def figure_6_7_8(runner, out_dir, work):
+    print("Figs. 6, 7 and 8: P3 sphere on two spheres, h = 0.01, with the reference")
+    run_, summary = run(runner, "p3_sphere_on_two_spheres.urdf", 5.0, 0.01, work)
+    ref = read_csv(os.path.join(REFERENCE, "P3_reference.csv"))
+    t = run_["t"]
+    fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    for axis, kind, unit in ((axes[0], "v", "m/s"), (axes[1], "w", "rad/s")):
+        for c in "xyz":
+            line, = axis.plot(t, run_[f"ball.{kind}{c}"], label=f"{kind}_{c}")
+            axis.plot(ref["t"][::10], ref[f"{kind}{c}"][::10], "o", ms=3, color=line.get_color())
+        axis.set_ylabel(f"{'velocity' if kind == 'v' else 'angular velocity'} ({unit})")
+        axis.grid(True, alpha=0.3)
+        axis.legend(fontsize=8)
+    axes[1].set_xlabel("t (s)")
+    axes[0].set_title("P3 (paper Fig. 6): ours as lines, the reference as dots")
+    save(fig, out_dir, "fig6_p3_velocities.png")
+    i35 = min(range(len(t)), key=lambda i: abs(t[i] - 3.5))
+    j35 = min(range(len(ref["t"])), key=lambda i: abs(ref["t"][i] - 3.5))
+    ours = [run_[f"ball.v{c}"][i35] for c in "xyz"]
+    theirs = [ref[f"v{c}"][j35] for c in "xyz"]
+    error = sum((a - b) ** 2 for a, b in zip(ours, theirs)) ** 0.5 / sum(b * b for b in theirs) ** 0.5
+    check("velocity at t = 3.5 s, relative error", f"{100 * error:.2f} %", "< 5 %", error < 0.05)
+    mu = {p["name"]: p["mu"] for p in summary["pairs"]}
+    events = {}
+    for figure, contact, pair in (("fig7_p3_contact_a.png", "A", "ball-sphere_a"),
+                                  ("fig8_p3_contact_b.png", "B", "ball-sphere_b")):
+        fn, ft, slip = run_[f"{pair}.fn"][1:], run_[f"{pair}.ft"][1:], run_[f"{pair}.slip"][1:]
+        fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+        axes[0].plot(t[1:], fn, label="normal force")
+        axes[0].plot(t[1:], [mu[pair] * f for f in fn], "--", label="mu * normal force")
+        axes[0].plot(t[1:], ft, label="friction magnitude")
+        axes[0].plot(ref["t"][::10], ref[f"{contact}_lambda_n"][::10], "o", ms=3, color="tab:blue",
+                     label="reference normal force")
+        axes[0].plot(ref["t"][::10], ref[f"{contact}_friction"][::10], "o", ms=3, color="tab:green",
+                     label="reference friction")
+        axes[0].set_ylabel("force (N)")
+        axes[1].plot(t[1:], slip, label="slip speed")
+        axes[1].plot(ref["t"][::10], ref[f"{contact}_slip_speed"][::10], "o", ms=3, label="reference")
+        axes[1].set_ylabel("slip speed (m/s)")
+        axes[1].set_xlabel("t (s)")
+        for axis in axes:
+            axis.grid(True, alpha=0.3)
+            axis.legend(fontsize=8)
+        axes[0].set_title(f"P3 (paper Fig. {7 if contact == 'A' else 8}): contact {contact}")
+        save(fig, out_dir, figure)
+        events[f"{contact} separates"] = next((ti for ti, f in zip(t[1:], fn) if f <= 0.0), float("nan"))
+        if contact == "B":
+            events["B rolls -> slides"] = next((ti for ti, s in zip(t[1:], slip) if s > 1e-4), float("nan"))
+    with open(os.path.join(REFERENCE, "summary.json")) as f:
+        reference_events = {f"{c} {'separates' if kind == 'separate' else 'rolls -> slides'}": time
+                            for kind, c, time in json.load(f)["P3"]["events"]}
+    for name, time in sorted(events.items()):
+        check(f"P3 event '{name}' (s)", f"{time:.2f}", f"{reference_events[name]:.4f} +- 0.05",
+              abs(time - reference_events[name]) < 0.05)
+
+
+def ellipsoid_on_ellipsoid(runner, out_dir, work, quick):
+    print("Ellipsoid on a fixed ellipsoid (no closed-form distance), h = 0.005")
+    run_, summary = run(runner, "ellipsoid_on_ellipsoid.urdf", 1.0 if quick else 1.8, 0.005, work)
+    t = run_["t"]
+    total = [k + p for k, p in zip(run_["energy.kinetic"], run_["energy.potential"])]
+    fig, axes = plt.subplots(3, 1, figsize=(8, 7.5), sharex=True)
+    axes[0].plot(t, run_["egg-mound.gap"], "k")
+    axes[0].set_ylabel("gap (m)")
+    axes[1].plot(t[1:], run_["egg-mound.fn"][1:], label="normal force")
+    axes[1].plot(t[1:], run_["egg-mound.ft"][1:], label="friction magnitude")
+    axes[1].set_ylabel("force (N)")
+    axes[1].legend(fontsize=8)
+    axes[2].plot(t, run_["energy.kinetic"], label="kinetic")
+    axes[2].plot(t, [p - run_["energy.potential"][0] for p in run_["energy.potential"]], label="potential - initial")
+    axes[2].plot(t, [e - total[0] for e in total], "k", label="total - initial")
+    axes[2].set_ylabel("energy (J)")
+    axes[2].set_xlabel("t (s)")
+    axes[2].legend(fontsize=8)
+    for axis in axes:
+        axis.grid(True, alpha=0.3)
+    axes[0].set_title("An ellipsoid toppling and rolling down a fixed ellipsoid")
+    save(fig, out_dir, "ellipsoid_on_ellipsoid.png")
+    check("largest penetration (m)", f"{summary['max_penetration']:.1e}", "< 1e-8", summary["max_penetration"] < 1e-8)
+    check("non-converged steps", summary["nonconverged_steps"], "0", summary["nonconverged_steps"] == 0)
+    rise = max(total) - total[0]
+    check("total energy rise above the initial (J)", f"{rise:.1e}", "<= 1e-9 (dissipative contact)", rise <= 1e-9)
+
+
+def main(argv):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("out_dir")
+    parser.add_argument("--runner", required=True, help="path of implicit_sim_run")
+    parser.add_argument("--quick", action="store_true", help="short horizons (tests)")
+    args = parser.parse_args(argv)
+    out_dir = os.path.abspath(args.out_dir)
+    work = os.path.join(out_dir, "runs")
+    os.makedirs(work, exist_ok=True)
+    figure_1(args.runner, out_dir, work, args.quick)
+    figure_3_4(args.runner, out_dir, work)
+    figure_6_7_8(args.runner, out_dir, work)
+    ellipsoid_on_ellipsoid(args.runner, out_dir, work, args.quick)
+    print(f"checks: {'all passed' if not FAILURES else 'FAILED: ' + '; '.join(FAILURES)}")
+    return 1 if FAILURES else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
