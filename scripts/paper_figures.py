@@ -52,6 +52,13 @@ def run(runner, scene, duration, h, work):
         return read_csv(os.path.join(out, "trajectory.csv")), json.load(f)
 
 
+def finish(axes, legend=True):
+    for axis in axes:
+        axis.grid(True, alpha=0.3)
+        if legend:
+            axis.legend(fontsize=8)
+
+
 def save(fig, out_dir, name):
     fig.tight_layout()
     path = os.path.join(out_dir, name)
@@ -74,8 +81,7 @@ def figure_1(runner, out_dir, work, quick):
     axis.set_xlabel("t (s)")
     axis.set_ylabel("kinetic energy (J)")
     axis.set_title(f"P1 rolling disc, h = 0.01 s: the smooth implicit disc keeps its energy (exact: 6.75 J)")
-    axis.grid(True, alpha=0.3)
-    axis.legend(fontsize=8)
+    finish([axis])
     save(fig, out_dir, "fig1a_p1_energy_ngons.png")
     check("smooth disc |KE(T)/KE0 - 1|", f"{abs(ratios['smooth'] - 1):.1e}", "< 1e-9", abs(ratios["smooth"] - 1) < 1e-9)
     order = [ratios[f"{n}-gon"] for n in (10, 20, 40, 100, 1000)]
@@ -99,8 +105,7 @@ def figure_1(runner, out_dir, work, quick):
     axis.set_xlabel("t (s)")
     axis.set_ylabel("kinetic energy (J)")
     axis.set_title(f"P1: 1000-gon disc at four time steps ({T:g} s)")
-    axis.grid(True, alpha=0.3)
-    axis.legend(fontsize=8)
+    finish([axis])
     save(fig, out_dir, "fig1b_p1_energy_1000gon.png")
     check("1000-gon never gains energy (max total/total0 - 1)", f"{max(gains):.1e}", "<= 1e-9", max(gains) <= 1e-9)
 
@@ -118,9 +123,7 @@ def figure_3_4(runner, out_dir, work):
         axes[1].plot(t, run_[f"ball.{c}"], label=c)
     axes[1].set_ylabel("other velocities (m/s, rad/s)")
     axes[1].set_xlabel("t (s)")
-    for axis in axes:
-        axis.grid(True, alpha=0.3)
-        axis.legend(fontsize=8)
+    finish(axes)
     axes[0].set_title("P2 (paper Fig. 3): the spin decays linearly and stops; nothing else moves")
     save(fig, out_dir, "fig3_p2_velocities.png")
     slope = (run_["ball.wz"][10] - run_["ball.wz"][0]) / (t[10] - t[0])
@@ -138,9 +141,7 @@ def figure_3_4(runner, out_dir, work):
     axes[1].plot(t[1:], run_["ball-ground.ft"][1:], "o", ms=4, label="implicit_sim")
     axes[1].set_ylabel("tangential friction (N)")
     axes[1].set_xlabel("t (s)")
-    for axis in axes:
-        axis.grid(True, alpha=0.3)
-        axis.legend(fontsize=8)
+    finish(axes)
     axes[0].set_title("P2 (paper Fig. 4): torsional friction mu e_r m g while spinning, then 0")
     save(fig, out_dir, "fig4_p2_friction.png")
     moment = abs(run_["ball-ground.mr"][1])
@@ -158,8 +159,7 @@ def figure_6_7_8(runner, out_dir, work):
             line, = axis.plot(t, run_[f"ball.{kind}{c}"], label=f"{kind}_{c}")
             axis.plot(ref["t"][::10], ref[f"{kind}{c}"][::10], "o", ms=3, color=line.get_color())
         axis.set_ylabel(f"{'velocity' if kind == 'v' else 'angular velocity'} ({unit})")
-        axis.grid(True, alpha=0.3)
-        axis.legend(fontsize=8)
+    finish(axes)
     axes[1].set_xlabel("t (s)")
     axes[0].set_title("P3 (paper Fig. 6): ours as lines, the reference as dots")
     save(fig, out_dir, "fig6_p3_velocities.png")
@@ -187,9 +187,7 @@ def figure_6_7_8(runner, out_dir, work):
         axes[1].plot(ref["t"][::10], ref[f"{contact}_slip_speed"][::10], "o", ms=3, label="reference")
         axes[1].set_ylabel("slip speed (m/s)")
         axes[1].set_xlabel("t (s)")
-        for axis in axes:
-            axis.grid(True, alpha=0.3)
-            axis.legend(fontsize=8)
+        finish(axes)
         axes[0].set_title(f"P3 (paper Fig. {7 if contact == 'A' else 8}): contact {contact}")
         save(fig, out_dir, figure)
         events[f"{contact} separates"] = next((ti for ti, f in zip(t[1:], fn) if f <= 0.0), float("nan"))
@@ -221,8 +219,7 @@ def ellipsoid_on_ellipsoid(runner, out_dir, work, quick):
     axes[2].set_ylabel("energy (J)")
     axes[2].set_xlabel("t (s)")
     axes[2].legend(fontsize=8)
-    for axis in axes:
-        axis.grid(True, alpha=0.3)
+    finish(axes, legend=False)
     axes[0].set_title("An ellipsoid toppling and rolling down a fixed ellipsoid")
     save(fig, out_dir, "ellipsoid_on_ellipsoid.png")
     check("largest penetration (m)", f"{summary['max_penetration']:.1e}", "< 1e-8", summary["max_penetration"] < 1e-8)

@@ -22,14 +22,12 @@ BroadPhase::BroadPhase(const Model& model)
   sweep_.reserve(bounded_.size());
 }
 
-bool BroadPhase::HalfSpaceCandidate(int plane_body, int other_body, const std::vector<Pose>& X_WB,
+bool BroadPhase::HalfSpaceCandidate(int plane_body, const Pose& X_SW, int other_body,
                                     const std::vector<double>& inflation) const {
   const ConvexShape& plane = model_.bodies[plane_body].shape;
-  const Pose X_WS = X_WB[plane_body] * plane.X_BS;
+  const Vec3 p_S = X_SW * centre_[other_body];
   double signed_distance = -1e300;  // of the other body's centre from the half-space (|grad f| = 1 for a plane)
-  for (const Inequality& inequality : plane.inequalities) {
-    signed_distance = std::max(signed_distance, inequality.Value(X_WS.inverse() * centre_[other_body]));
-  }
+  for (const Inequality& inequality : plane.inequalities) signed_distance = std::max(signed_distance, inequality.Value(p_S));
   return signed_distance <= radius_[other_body] + inflation[other_body] + inflation[plane_body];
 }
 
@@ -56,8 +54,9 @@ void BroadPhase::FindPairs(const std::vector<Pose>& X_WB, const std::vector<doub
     }
   }
   for (int plane : half_spaces_) {
+    const Pose X_SW = (X_WB[plane] * model_.bodies[plane].shape.X_BS).inverse();  // world to the plane's shape frame
     for (int b : bounded_) {
-      if (HalfSpaceCandidate(plane, b, X_WB, inflation)) add(plane, b);
+      if (HalfSpaceCandidate(plane, X_SW, b, inflation)) add(plane, b);
     }
     for (int other : half_spaces_) {
       if (other > plane) add(plane, other);

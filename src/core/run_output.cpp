@@ -100,11 +100,11 @@ void TrajectoryWriter::WriteEnergies(const State& state) {
 
 void TrajectoryWriter::WriteInitial(const State& state) {
   WriteBodies(state);
-  for (const ContactPair& pair : model_.pairs) {
-    if (!pair_columns_) break;
+  for (size_t c = 0; pair_columns_ && c < model_.pairs.size(); ++c) {
+    const ContactPair& pair = model_.pairs[c];
     const ClosestPointsResult cp =
         FindClosestPoints(model_.bodies[pair.body1].shape, state.X_WB(model_, pair.body1),
-                             model_.bodies[pair.body2].shape, state.X_WB(model_, pair.body2));
+                          model_.bodies[pair.body2].shape, state.X_WB(model_, pair.body2));
     out_ << ',' << FormatNumber(cp.solved ? cp.distance : std::nan("")) << ",nan,nan,nan,nan";
   }
   out_ << ",0,0,1";

@@ -135,18 +135,23 @@ void ActivePairs(const StepProblem& problem, std::vector<int>* pairs) {
   for (const PairBlock& blk : problem.blocks()) pairs->push_back(blk.pair);
 }
 
+// Lays the problem and the workspace vectors out for `pairs`; carries z_old over into data->z_remap.
+void LayOut(const std::vector<int>& pairs, const Eigen::VectorXd* z_old, Data* data) {
+  data->problem.SetActivePairs(pairs, z_old, &data->z_remap, &data->new_blocks);
+  data->z_start.resize(data->problem.size());
+  data->z_best.resize(data->problem.size());
+}
+
 // Lays the problem out for `pairs`, carrying z over; the blocks of new pairs are seeded from `state` like a cold start.
 void SetPairs(const Model& model, const State& state, const std::vector<int>& pairs, Data* data) {
   StepProblem& problem = data->problem;
-  problem.SetActivePairs(pairs, &data->z, &data->z_remap, &data->new_blocks);
+  LayOut(pairs, &data->z, data);
   data->z.swap(data->z_remap);
   for (int c : data->new_blocks) {
     SeedPair(model, state, c, problem, &data->z, /*use_oracle=*/false);
     problem.ResetTangentAxis(c, data->z);
     problem.SeedFriction(c, &data->z);
   }
-  data->z_start.resize(problem.size());
-  data->z_best.resize(problem.size());
 }
 
 // The pairs of the NCP for a step of length h from `state`: the broad phase over bounding spheres grown by the motion
@@ -302,11 +307,7 @@ bool Advance(const Model& model, const StepperOptions& options, double h, int de
   }
   report->pairs_in_ncp = static_cast<int>(data->problem.blocks().size());
   if (!result.converged && depth < Data::kMaxSubstepDepth) {
-    if (data->broad_phase) {
-      data->problem.SetActivePairs(data->pairs_backup[depth], nullptr, &data->z_remap, &data->new_blocks);
-      data->z_start.resize(data->problem.size());
-      data->z_best.resize(data->problem.size());
-    }
+    if (data->broad_phase) LayOut(data->pairs_backup[depth], nullptr, data);  // backup is laid out for these
     data->z = backup;
     data->has_warm_start = had_warm_start;
     report->substeps += 1;

@@ -24,8 +24,8 @@ class BroadPhase {
   void FindPairs(const std::vector<Pose>& X_WB, const std::vector<double>& inflation, std::vector<int>* pairs);
 
  private:
-  bool HalfSpaceCandidate(int plane_body, int other_body, const std::vector<Pose>& X_WB,
-                          const std::vector<double>& inflation) const;
+  // X_SW: world to the half-space's shape frame.
+  bool HalfSpaceCandidate(int plane_body, const Pose& X_SW, int other_body, const std::vector<double>& inflation) const;
   const Model& model_;
   std::vector<int> bounded_;            // bodies with a bounded shape
   std::vector<int> half_spaces_;        // bodies whose shape is a half-space
