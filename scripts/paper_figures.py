@@ -12,11 +12,12 @@ Runs the headless runner on the paper's scenes and writes into OUTDIR:
                                magnitude and slip speed with the reference
   ellipsoid_on_ellipsoid.png   an ellipsoid toppling down a fixed ellipsoid (no closed-form distance): gap, energy
 Prints, per figure, the numbers it shows against the reference with PASS/FAIL, and exits 1 if a check fails.
-The 1000-gon sweep of Fig. 1(b) covers 1 s (5 s in the paper): each of its steps solves a dense block of about 1000
-unknowns. --quick shortens the horizons (P1 to 1 s, the 1000-gon sweep to 0.05 s, the ellipsoid to 1 s) for tests."""
+P1 runs 5 s (about 4 min, most of it the 1000-gon at h = 0.0005); --quick shortens Fig. 1(a) to 1 s and Fig. 1(b) to
+0.2 s (about 40 s in all) for tests."""
 import argparse
 import csv
 import json
+import math
 import os
 import subprocess
 import sys
@@ -90,24 +91,42 @@ def figure_1(runner, out_dir, work, quick):
           all(a < b for a, b in zip(order, order[1:])) and order[-1] <= ratios["smooth"] + 1e-3)
 
     print("Fig. 1(b): the 1000-gon at four time steps and the smooth disc")
-    # 1000 half-spaces make one dense block of about 1000 unknowns: 0.1-0.3 s a step, so this sweep is 1 s long.
-    T = 0.05 if quick else 1.0
+    T = 0.2 if quick else 5.0
     fig, axis = plt.subplots(figsize=(8, 4.5))
     smooth, _ = run(runner, "p1_disc_rolling.urdf", T, 0.01, work)
     axis.plot(smooth["t"], smooth["energy.kinetic"], "k", label="smooth disc, h = 0.01")
-    gains = []
+    smooth_error = abs(smooth["energy.kinetic"][-1] / smooth["energy.kinetic"][0] - 1)
+    limit = vertex_impact_limit(1000, T)
+    ratios, worst_penetration, nonconverged = [], 0.0, 0
     for h in (0.01, 0.005, 0.001, 0.0005):
-        run_, _ = run(runner, "p1_ngon1000.urdf", T, h, work)
+        run_, summary = run(runner, "p1_ngon1000.urdf", T, h, work)
         ke = run_["energy.kinetic"]
-        total = [k + p for k, p in zip(ke, run_["energy.potential"])]
-        gains.append(max(total) / total[0] - 1)
-        axis.plot(run_["t"], ke, label=f"1000-gon, h = {h:g}: KE(T)/KE0 = {ke[-1] / ke[0]:.4f}")
+        ratios.append(ke[-1] / ke[0])
+        worst_penetration = max(worst_penetration, summary["max_penetration"])
+        nonconverged += summary["nonconverged_steps"]
+        axis.plot(run_["t"], ke, label=f"1000-gon, h = {h:g}: KE(T)/KE0 = {ratios[-1]:.5f}")
+    axis.axhline(6.75 * limit, color="gray", ls=":", label=f"inelastic vertex impacts as h -> 0: {limit:.5f}")
     axis.set_xlabel("t (s)")
     axis.set_ylabel("kinetic energy (J)")
-    axis.set_title(f"P1: 1000-gon disc at four time steps ({T:g} s)")
+    axis.set_title(f"P1: 1000-gon disc at four time steps, smooth disc at h = 0.01 ({T:g} s)")
     finish([axis])
     save(fig, out_dir, "fig1b_p1_energy_1000gon.png")
-    check("1000-gon never gains energy (max total/total0 - 1)", f"{max(gains):.1e}", "<= 1e-9", max(gains) <= 1e-9)
+    check("1000-gon KE(T)/KE0 for h = 0.01, 0.005, 0.001, 0.0005", ", ".join(f"{r:.5f}" for r in ratios),
+          f"each further from 1 than the smooth disc ({smooth_error:.1e})",
+          all(abs(r - 1) > 10 * smooth_error for r in ratios))
+    check("1000-gon at h = 0.0005: KE(T)/KE0", f"{ratios[-1]:.5f}",
+          f"between the vertex-impact limit {limit:.5f} and 1", limit <= ratios[-1] <= 1)
+    check("1000-gon runs: non-converged steps, largest penetration (m)", f"{nonconverged}, {worst_penetration:.1e}",
+          "0, < 1e-9", nonconverged == 0 and worst_penetration < 1e-9)
+
+
+def vertex_impact_limit(sides, duration):
+    """KE(T)/KE0 of a uniform regular polygon (circumradius 1 m, I = m r^2 / 2) rolling at 3 m/s when every vertex
+    landing is an inelastic impact that keeps the angular momentum about the new vertex: the true polygon's loss."""
+    angle = 2 * math.pi / sides
+    per_impact = ((0.5 + math.cos(angle)) / 1.5) ** 2
+    impacts = 3.0 * duration / (2 * math.sin(math.pi / sides))
+    return per_impact ** impacts
 
 
 def figure_3_4(runner, out_dir, work):
@@ -201,31 +220,42 @@ def figure_6_7_8(runner, out_dir, work):
               abs(time - reference_events[name]) < 0.05)
 
 
-def ellipsoid_on_ellipsoid(runner, out_dir, work, quick):
-    print("Ellipsoid on a fixed ellipsoid (no closed-form distance), h = 0.005")
-    run_, summary = run(runner, "ellipsoid_on_ellipsoid.urdf", 1.0 if quick else 1.8, 0.005, work)
+def ellipsoid_on_ellipsoid(runner, out_dir, work):
+    print("Ellipsoid on a fixed ellipsoid (no closed-form distance), h = 0.005 and 0.0025")
+    runs = {h: run(runner, "ellipsoid_on_ellipsoid.urdf", 1.8, h, work) for h in (0.005, 0.0025)}
+    run_, summary = runs[0.005]
     t = run_["t"]
-    total = [k + p for k, p in zip(run_["energy.kinetic"], run_["energy.potential"])]
     fig, axes = plt.subplots(3, 1, figsize=(8, 7.5), sharex=True)
     axes[0].plot(t, run_["egg-mound.gap"], "k")
     axes[0].set_ylabel("gap (m)")
     axes[1].plot(t[1:], run_["egg-mound.fn"][1:], label="normal force")
     axes[1].plot(t[1:], run_["egg-mound.ft"][1:], label="friction magnitude")
     axes[1].set_ylabel("force (N)")
-    axes[1].legend(fontsize=8)
-    axes[2].plot(t, run_["energy.kinetic"], label="kinetic")
-    axes[2].plot(t, [p - run_["energy.potential"][0] for p in run_["energy.potential"]], label="potential - initial")
-    axes[2].plot(t, [e - total[0] for e in total], "k", label="total - initial")
+    axes[2].plot(t, run_["energy.kinetic"], label="kinetic, h = 0.005")
+    rises = {}
+    for h, (r, _) in runs.items():
+        total = [k + p for k, p in zip(r["energy.kinetic"], r["energy.potential"])]
+        axes[2].plot(r["t"], [e - total[0] for e in total], label=f"total - initial, h = {h:g}")
+        rises[h] = (max(total) - total[0], max(e - min(total[:i + 1]) for i, e in enumerate(total)))
     axes[2].set_ylabel("energy (J)")
     axes[2].set_xlabel("t (s)")
-    axes[2].legend(fontsize=8)
-    finish(axes, legend=False)
-    axes[0].set_title("An ellipsoid toppling and rolling down a fixed ellipsoid")
+    finish(axes[1:])
+    finish(axes[:1], legend=False)
+    axes[0].set_title("An ellipsoid toppling and rolling down a fixed ellipsoid, then leaving it")
     save(fig, out_dir, "ellipsoid_on_ellipsoid.png")
-    check("largest penetration (m)", f"{summary['max_penetration']:.1e}", "< 1e-8", summary["max_penetration"] < 1e-8)
-    check("non-converged steps", summary["nonconverged_steps"], "0", summary["nonconverged_steps"] == 0)
-    rise = max(total) - total[0]
-    check("total energy rise above the initial (J)", f"{rise:.1e}", "<= 1e-9 (dissipative contact)", rise <= 1e-9)
+    penetration = max(s["max_penetration"] for _, s in runs.values())
+    nonconverged = sum(s["nonconverged_steps"] for _, s in runs.values())
+    check("largest penetration (m), non-converged steps", f"{penetration:.1e}, {nonconverged}", "< 1e-9, 0",
+          penetration < 1e-9 and nonconverged == 0)
+    check("total energy above the initial (J)", f"{max(rises[0.005][0], rises[0.0025][0]):.1e}",
+          "<= 1e-9 (the contact dissipates)", max(rises[0.005][0], rises[0.0025][0]) <= 1e-9)
+    # Rolling over a curved surface with p1 = p0 + h v1 lets the normal impulse do O(h) work per unit time (the
+    # end-of-step chord points out of the convex mound), so the largest local rise of the total energy must halve
+    # with h: it is a discretization error, not a modelling one.
+    ratio = rises[0.0025][1] / rises[0.005][1]
+    check("largest local total-energy rise at h = 0.005 and 0.0025 (J), ratio",
+          f"{rises[0.005][1]:.2e}, {rises[0.0025][1]:.2e}, {ratio:.2f}", "ratio 0.5 +- 0.2 (first order in h)",
+          abs(ratio - 0.5) <= 0.2)
 
 
 def main(argv):
@@ -240,7 +270,7 @@ def main(argv):
     figure_1(args.runner, out_dir, work, args.quick)
     figure_3_4(args.runner, out_dir, work)
     figure_6_7_8(args.runner, out_dir, work)
-    ellipsoid_on_ellipsoid(args.runner, out_dir, work, args.quick)
+    ellipsoid_on_ellipsoid(args.runner, out_dir, work)
     print(f"checks: {'all passed' if not FAILURES else 'FAILED: ' + '; '.join(FAILURES)}")
     return 1 if FAILURES else 0
 

@@ -36,7 +36,8 @@ Data::Data(const Model& model, PairSelection selection)
     : broad_phase(selection == PairSelection::kBroadPhase ||
                   (selection == PairSelection::kAuto && static_cast<int>(model.pairs.size()) > kAllPairsLimit)),
       problem(model, !broad_phase),
-      solver(problem.size(), broad_phase),
+      sparse(broad_phase || problem.size() > kDenseSizeLimit),
+      solver(problem.size(), sparse),
       broad(model),
       z(Eigen::VectorXd::Zero(problem.size())),
       z_start(Eigen::VectorXd::Zero(problem.size())),
@@ -47,7 +48,7 @@ Data::Data(const Model& model, PairSelection selection)
       inflation(model.bodies.size(), 0.0),
       contacts(problem.blocks().size()) {
   for (size_t c = 0; c < contacts.size(); ++c) contacts[c].pair = problem.blocks()[c].pair;
-  problem.set_regular_separated_friction(broad_phase);
+  problem.set_regular_separated_friction(sparse);
 }
 
 namespace {

@@ -27,6 +27,15 @@ bool Exists(const std::string& path) {
   return ::stat(path.c_str(), &st) == 0;
 }
 
+// True if `path` is a PNG file of more than `min_bytes` (a plot with curves, not an empty frame).
+::testing::AssertionResult IsPngWithContent(const std::string& path, size_t min_bytes = 20000) {
+  std::ifstream png(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(png)), std::istreambuf_iterator<char>());
+  if (bytes.substr(0, 8) != std::string("\x89PNG\r\n\x1a\n", 8)) return ::testing::AssertionFailure() << path << " is no PNG";
+  if (bytes.size() <= min_bytes) return ::testing::AssertionFailure() << path << ": " << bytes.size() << " bytes";
+  return ::testing::AssertionSuccess();
+}
+
 std::string TempDir(const std::string& name) {
   const std::string dir = ::testing::TempDir() + "implicit_sim_cli_" + name;
   std::system(("rm -rf '" + dir + "'").c_str());
@@ -69,13 +78,32 @@ TEST(RunnerCli, PlotToolDrawsEveryBodyContactAndTheEnergy) {
   const std::string plot = "/usr/bin/python3 " + std::string(IMPLICIT_SIM_SOURCE_DIR) + "/scripts/plot_run.py ";
   ASSERT_EQ(std::system((plot + out + " --svg > /dev/null 2>&1").c_str()), 0);
   for (const char* name : {"body_ball", "contact_ball-sphere_a", "contact_ball-sphere_b", "energy"}) {
-    std::ifstream png(out + "/plots/" + name + ".png", std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(png)), std::istreambuf_iterator<char>());
-    EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << name;
-    EXPECT_GT(bytes.size(), 20000u) << name << ": too small to hold the curves";
+    EXPECT_TRUE(IsPngWithContent(out + "/plots/" + name + ".png"));
     EXPECT_TRUE(Exists(out + "/plots/" + name + ".svg")) << name;
   }
   EXPECT_NE(std::system((plot + TempDir("no_run") + " > /dev/null 2>&1").c_str()), 0);
+}
+
+// The paper's figures on short horizons (scripts/paper_figures.py --quick, about 15 s): every figure is written as a
+// PNG with content, every printed check against the exact or reference solution passes, and the exit code says so.
+TEST(RunnerCli, PaperFiguresQuickWritesEveryFigureAndPassesItsChecks) {
+  const std::string out = TempDir("paper_figures");
+  const std::string command = "/usr/bin/python3 " + std::string(IMPLICIT_SIM_SOURCE_DIR) +
+                              "/scripts/paper_figures.py " + out + " --quick --runner " + IMPLICIT_SIM_RUNNER +
+                              " > " + out + ".log 2>&1";
+  const int status = std::system(command.c_str());
+  std::ifstream log_file(out + ".log");
+  const std::string log((std::istreambuf_iterator<char>(log_file)), std::istreambuf_iterator<char>());
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << log;
+  EXPECT_NE(log.find("checks: all passed"), std::string::npos) << log;
+  EXPECT_EQ(log.find("[FAIL]"), std::string::npos) << log;
+  int passed = 0;
+  for (size_t at = log.find("[PASS]"); at != std::string::npos; at = log.find("[PASS]", at + 1)) ++passed;
+  EXPECT_EQ(passed, 16) << log;
+  for (const char* name : {"fig1a_p1_energy_ngons", "fig1b_p1_energy_1000gon", "fig3_p2_velocities", "fig4_p2_friction",
+                           "fig6_p3_velocities", "fig7_p3_contact_a", "fig8_p3_contact_b", "ellipsoid_on_ellipsoid"}) {
+    EXPECT_TRUE(IsPngWithContent(out + "/" + name + ".png"));
+  }
 }
 
 TEST(RunnerCli, RefusesBadArgumentsAndWritesNothing) {

@@ -58,9 +58,13 @@ class Data {
   // sparse solve above that.
   enum class PairSelection { kAuto, kAllPairs, kBroadPhase };
   static constexpr int kAllPairsLimit = 16;
+  // NCPs with more unknowns than this are solved in sparse mode (see ncp_solver.h) even with every pair in them: a
+  // 1000-gon disc has one pair with about 1000 unknowns, whose dense LU took seconds per step.
+  static constexpr int kDenseSizeLimit = 200;
   explicit Data(const Model& model, PairSelection selection = PairSelection::kAuto);
   const bool broad_phase;
   StepProblem problem;
+  const bool sparse;  // broad_phase or more than kDenseSizeLimit unknowns
   SemismoothNewton solver;
   BroadPhase broad;
   Eigen::VectorXd z;            // the last solution (warm start of the next step)
