@@ -105,7 +105,9 @@ def figure_1(runner, out_dir, work, quick):
         worst_penetration = max(worst_penetration, summary["max_penetration"])
         nonconverged += summary["nonconverged_steps"]
         axis.plot(run_["t"], ke, label=f"1000-gon, h = {h:g}: KE(T)/KE0 = {ratios[-1]:.5f}")
-    axis.axhline(6.75 * limit, color="gray", ls=":", label=f"inelastic vertex impacts as h -> 0: {limit:.5f}")
+    times = [T * i / 100 for i in range(101)]
+    axis.plot(times, [6.75 * vertex_impact_limit(1000, ti) for ti in times], color="gray", ls=":",
+              label=f"1000-gon as h -> 0 (inelastic vertex impacts): {limit:.5f}")
     axis.set_xlabel("t (s)")
     axis.set_ylabel("kinetic energy (J)")
     axis.set_title(f"P1: 1000-gon disc at four time steps, smooth disc at h = 0.01 ({T:g} s)")
@@ -187,7 +189,7 @@ def figure_6_7_8(runner, out_dir, work):
     ours = [run_[f"ball.v{c}"][i35] for c in "xyz"]
     theirs = [ref[f"v{c}"][j35] for c in "xyz"]
     error = sum((a - b) ** 2 for a, b in zip(ours, theirs)) ** 0.5 / sum(b * b for b in theirs) ** 0.5
-    check("velocity at t = 3.5 s, relative error", f"{100 * error:.2f} %", "< 5 %", error < 0.05)
+    check("velocity at t = 3.5 s, relative error", f"{100 * error:.2f} %", "< 3 %", error < 0.03)
     mu = {p["name"]: p["mu"] for p in summary["pairs"]}
     events = {}
     for figure, contact, pair in (("fig7_p3_contact_a.png", "A", "ball-sphere_a"),
@@ -210,14 +212,15 @@ def figure_6_7_8(runner, out_dir, work):
         axes[0].set_title(f"P3 (paper Fig. {7 if contact == 'A' else 8}): contact {contact}")
         save(fig, out_dir, figure)
         events[f"{contact} separates"] = next((ti for ti, f in zip(t[1:], fn) if f <= 0.0), float("nan"))
-        if contact == "B":
-            events["B rolls -> slides"] = next((ti for ti, s in zip(t[1:], slip) if s > 1e-4), float("nan"))
+        if contact == "B":  # the reference's roll -> slide time is 2.9448 s; its slip exceeds 1e-4 m/s at 2.9558 s
+            events["B slip > 1e-4 m/s"] = next((ti for ti, s in zip(t[1:], slip) if s > 1e-4), float("nan"))
     with open(os.path.join(REFERENCE, "summary.json")) as f:
-        reference_events = {f"{c} {'separates' if kind == 'separate' else 'rolls -> slides'}": time
-                            for kind, c, time in json.load(f)["P3"]["events"]}
+        names = {"separate": "{} separates", "slip_B>0.0001": "{} slip > 1e-4 m/s"}
+        reference_events = {names[kind].format(c): time for kind, c, time in json.load(f)["P3"]["events"]
+                            if kind in names}
     for name, time in sorted(events.items()):
-        check(f"P3 event '{name}' (s)", f"{time:.2f}", f"{reference_events[name]:.4f} +- 0.05",
-              abs(time - reference_events[name]) < 0.05)
+        check(f"P3 event '{name}' (s)", f"{time:.2f}", f"{reference_events[name]:.4f} +- 0.02",
+              abs(time - reference_events[name]) < 0.02)
 
 
 def ellipsoid_on_ellipsoid(runner, out_dir, work):
