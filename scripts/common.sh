@@ -9,7 +9,7 @@ export ROS_HOME=$WS/.ros ROS_LOG_DIR=$WS/.ros/log ROS_HOSTNAME=localhost
 APT_PACKAGES="build-essential cmake pkg-config googletest libgtest-dev catkin libroscpp-dev libtf2-ros-dev
   libgeometry-msgs-dev ros-geometry-msgs libvisualization-msgs-dev libstd-msgs-dev ros-std-msgs libstd-srvs-dev
   libros-rosgraph-msgs-dev ros-message-generation ros-message-runtime librostest-dev python3-rostest
-  libeigen3-dev coinor-libipopt-dev libsuitesparse-dev liburdfdom-dev libtinyxml2-dev libdiagnostic-updater-dev python3-rosbag python3-matplotlib"
+  libeigen3-dev coinor-libipopt-dev libsuitesparse-dev liburdfdom-dev libtinyxml2-dev libdiagnostic-updater-dev python3-rosbag python3-matplotlib locales"
 
 install_packages() {
   local missing=""
@@ -24,6 +24,21 @@ install_packages() {
     $sudo apt-get update
     $sudo apt-get -o DPkg::Lock::Timeout=900 install -y --no-install-recommends $APT_PACKAGES
   fi
+  ensure_test_locale
+}
+
+# The locale tests (test/core/test_locale.cpp) need de_DE.UTF-8 (',' as decimal separator); they fail without it.
+ensure_test_locale() {
+  locale -a 2>/dev/null | grep -qi '^de_DE\.utf-\?8$' && return 0
+  echo "[implicit_sim] generating the de_DE.UTF-8 locale"
+  local sudo=""
+  [ "$(id -u)" = 0 ] || sudo=sudo
+  if grep -q '^# *de_DE\.UTF-8 UTF-8' /etc/locale.gen 2>/dev/null; then
+    $sudo sed -i 's/^# *\(de_DE\.UTF-8 UTF-8\)/\1/' /etc/locale.gen
+  elif ! grep -q '^de_DE\.UTF-8 UTF-8' /etc/locale.gen 2>/dev/null; then
+    echo "de_DE.UTF-8 UTF-8" | $sudo tee -a /etc/locale.gen >/dev/null
+  fi
+  $sudo locale-gen
 }
 
 build_workspace() {

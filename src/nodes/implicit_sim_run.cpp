@@ -1,5 +1,6 @@
 // Headless runner: implicit_sim_run --scene FILE --duration T --dt H --out DIR
 // Writes DIR/trajectory.csv and DIR/summary.json (see README.md). No roscore needed.
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -25,13 +26,32 @@ struct Args {
   implicit_sim::StepperOptions::Solver solver = implicit_sim::StepperOptions::Solver::kNewton;
 };
 
+// A finite number > 0, read with '.' as the decimal point whatever the locale (std::from_chars).
 double ParsePositive(const std::string& flag, const std::string& text) {
-  char* end = nullptr;
-  const double value = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !std::isfinite(value) || value <= 0.0) {
+  double value = 0.0;
+  const char* end = text.data() + text.size();
+  const auto result = std::from_chars(text.data(), end, value);
+  if (text.empty() || result.ec != std::errc() || result.ptr != end || !std::isfinite(value) || value <= 0.0) {
     throw std::invalid_argument(flag + " must be a finite number > 0, got '" + text + "'");
   }
   return value;
+}
+
+// Refuses a value above `max`; the message prints numbers with '.' (FormatNumber), never through the C locale.
+void CheckAtMost(const std::string& flag, double value, double max) {
+  if (value > max) {
+    throw std::invalid_argument(flag + " must be at most " + implicit_sim::FormatNumber(max) + ", got " +
+                                implicit_sim::FormatNumber(value));
+  }
+}
+
+// Error messages are one line: control characters (a newline in a link name, bytes of a binary file) become '?'.
+std::string OneLine(const std::string& message) {
+  std::string line = message;
+  for (char& c : line) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+  }
+  return line;
 }
 
 Args ParseArgs(int argc, char** argv) {
@@ -57,7 +77,11 @@ Args ParseArgs(int argc, char** argv) {
   args.out = values["--out"];
   args.duration = ParsePositive("--duration", values["--duration"]);
   if (values.count("--dt")) args.dt = ParsePositive("--dt", values["--dt"]);
+  CheckAtMost("--dt", args.dt, 1.0);  // s
   if (values.count("--tolerance")) args.newton.tolerance = ParsePositive("--tolerance", values["--tolerance"]);
+  if (args.newton.tolerance >= 1.0) {
+    throw std::invalid_argument("--tolerance must be < 1, got " + implicit_sim::FormatNumber(args.newton.tolerance));
+  }
   if (values.count("--max-iterations")) {
     const double n = ParsePositive("--max-iterations", values["--max-iterations"]);
     if (n != std::floor(n) || n > 100000) throw std::invalid_argument("--max-iterations must be an integer in [1, 100000]");
@@ -97,7 +121,7 @@ int main(int argc, char** argv) {
                                   ")");
     }
   } catch (const std::exception& e) {
-    std::cerr << "implicit_sim_run: " << e.what() << "\n";
+    std::cerr << "implicit_sim_run: " << OneLine(e.what()) << "\n";
     return 2;
   }
   try {
@@ -133,7 +157,7 @@ int main(int argc, char** argv) {
               << "; wrote " << args.out << "/trajectory.csv and summary.json\n";
     return summary.nonconverged_steps == 0 && summary.steps == steps ? 0 : 1;
   } catch (const std::exception& e) {
-    std::cerr << "implicit_sim_run: " << e.what() << "\n";
+    std::cerr << "implicit_sim_run: " << OneLine(e.what()) << "\n";
     return 1;
   }
 }
