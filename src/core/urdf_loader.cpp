@@ -269,7 +269,9 @@ void CheckInertial(const tinyxml2::XMLElement* inertial, const std::string& wher
   CheckNumbers(mass, "value", at + " <mass>", 1, false);
   const tinyxml2::XMLElement* inertia = inertial->FirstChildElement("inertia");
   if (!inertia) Fail(at + ": missing <inertia>");
-  for (const char* name : {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"}) CheckNumbers(inertia, name, at + " <inertia>", 1, false);
+  for (const char* name : {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"}) {
+    CheckNumbers(inertia, name, at + " <inertia>", 1, false);  // kg m^2
+  }
 }
 
 void CheckLinkElements(const tinyxml2::XMLElement* link, const std::string& name) {
