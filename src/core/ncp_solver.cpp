@@ -32,6 +32,7 @@ void SemismoothNewton::Resize(int n) {
   if (!sparse_) {
     J_.resize(n, n);
     normal_.resize(n, n);
+    lu_dense_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n);
     ldlt_ = Eigen::LDLT<Eigen::MatrixXd>(n);
   }
   Phi_.resize(n);
@@ -45,35 +46,44 @@ void SemismoothNewton::Evaluate(StepProblem* problem, const NewtonOptions& optio
                                 bool jacobian) {
   if (!jacobian) {
     problem->Evaluate(z, &Phi_, nullptr);
-  } else if (sparse_) {
-    problem->set_jacobian_regularization(options.sparse_regularization);
+    return;
+  }
+  problem->set_jacobian_regularization(options.sparse_regularization);
+  if (sparse_) {
     problem->EvaluateSparse(z, &Phi_, &J_sparse_);
-    problem->set_jacobian_regularization(0.0);
   } else {
     problem->Evaluate(z, &Phi_, &J_);
   }
+  problem->set_jacobian_regularization(0.0);
 }
 
-bool SemismoothNewton::Direction(const NewtonOptions& options, double merit) {
+bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, bool least_squares) {
+  const double damping = options.lm_damping * std::max(1.0, merit);
   if (!sparse_) {
-    // Levenberg-Marquardt direction: (J^T J + lambda I) dz = -J^T Phi.
+    if (!least_squares) {
+      // The Newton direction J dz = -Phi by LU with partial pivoting. (The LM normal equations alone square J's
+      // condition number, which grows as 1/h: P3 at h = 0.001 stalled at |Phi| = 1e-7 in its first steps.)
+      lu_dense_.compute(J_);
+      dz_.noalias() = lu_dense_.solve(-Phi_);
+      return dz_.allFinite();
+    }
+    // Levenberg-Marquardt: (J^T J + lambda I) dz = -J^T Phi.
     normal_.setZero();
     normal_.selfadjointView<Eigen::Lower>().rankUpdate(J_.transpose());  // lower triangle of J^T J: half the work
-    normal_.diagonal().array() += options.lm_damping * std::max(1.0, merit);
+    normal_.diagonal().array() += damping;
     rhs_.noalias() = -J_.transpose() * Phi_;
     ldlt_.compute(normal_);
     dz_ = ldlt_.solve(rhs_);
     return dz_.allFinite();
   }
   const Eigen::SparseMatrix<double>& J = J_sparse_.matrix;
-  if (lu_.Factorize(J, J_sparse_.pattern_version)) {
+  if (!least_squares) {
+    if (!lu_.Factorize(J, J_sparse_.pattern_version)) return false;
     dz_ = -Phi_;
-    if (lu_.Solve(&dz_) && dz_.allFinite()) return true;
+    return lu_.Solve(&dz_) && dz_.allFinite();
   }
-  // The LU failed (a structurally singular Jacobian): the Levenberg-Marquardt normal equations instead.
-  ++lm_fallbacks_;
   normal_sparse_ = J.transpose() * J;
-  for (int i = 0; i < normal_sparse_.rows(); ++i) normal_sparse_.coeffRef(i, i) += options.lm_damping * std::max(1.0, merit);
+  for (int i = 0; i < normal_sparse_.rows(); ++i) normal_sparse_.coeffRef(i, i) += damping;
   rhs_ = -(J.transpose() * Phi_);
   sparse_ldlt_.compute(normal_sparse_);
   if (sparse_ldlt_.info() != Eigen::Success) return false;
@@ -81,9 +91,22 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit) {
   return dz_.allFinite();
 }
 
+double SemismoothNewton::LineSearch(StepProblem* problem, const NewtonOptions& options, const Eigen::VectorXd& z,
+                                    double merit) {
+  // Armijo backtracking on the merit 0.5 |Phi|^2; the accepted point is left in z_trial_.
+  for (double step = 1.0; step >= options.min_step; step *= 0.5) {
+    z_trial_ = z + step * dz_;
+    problem->Evaluate(z_trial_, &Phi_trial_, nullptr);
+    const double trial_merit = 0.5 * Phi_trial_.squaredNorm();
+    if (std::isfinite(trial_merit) && trial_merit <= merit * (1.0 - 2.0 * options.armijo * step)) return step;
+  }
+  return 0.0;
+}
+
 NewtonResult SemismoothNewton::Solve(StepProblem* problem, const NewtonOptions& options, Eigen::VectorXd* z) {
   NewtonResult result;
   Resize(problem->size());
+  if (sparse_) lu_.ForgetPivots();  // a solve depends on its inputs only
   Evaluate(problem, options, *z, true);
   double merit = 0.5 * Phi_.squaredNorm();
   // Relative part: rows such as a1 - a2 - d n carry coordinates, whose rounding error grows with their size.
@@ -95,17 +118,16 @@ NewtonResult SemismoothNewton::Solve(StepProblem* problem, const NewtonOptions& 
       result.converged = true;
       return result;
     }
-    if (!Direction(options, merit)) break;
-    // Armijo backtracking on the merit 0.5 |Phi|^2.
-    double step = 1.0, trial_merit = merit;
-    while (step >= options.min_step) {
-      z_trial_ = *z + step * dz_;
-      problem->Evaluate(z_trial_, &Phi_trial_, nullptr);
-      trial_merit = 0.5 * Phi_trial_.squaredNorm();
-      if (std::isfinite(trial_merit) && trial_merit <= merit * (1.0 - 2.0 * options.armijo * step)) break;
-      step *= 0.5;
+    // The LU direction first; where J is singular, the Levenberg-Marquardt one, a descent direction whenever
+    // J^T Phi != 0. In dense mode also where the LU direction does not decrease the merit; in sparse mode that is
+    // left to the retry ladder, because J^T J fills in (the 1000-gon's body couples to all its 1000 multipliers).
+    const bool lu_ok = Direction(options, merit, false);
+    bool accepted = lu_ok && LineSearch(problem, options, *z, merit) > 0.0;
+    if (!accepted && (!lu_ok || !sparse_)) {
+      ++lm_fallbacks_;
+      accepted = Direction(options, merit, true) && LineSearch(problem, options, *z, merit) > 0.0;
     }
-    if (step < options.min_step) break;  // no decrease along dz: stalled (Phi_ still belongs to *z)
+    if (!accepted) break;  // no decrease: stalled (Phi_ still belongs to *z)
     z->swap(z_trial_);
     Evaluate(problem, options, *z, true);
     merit = 0.5 * Phi_.squaredNorm();

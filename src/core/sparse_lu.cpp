@@ -45,6 +45,8 @@ bool SparseLu::Factorize(const Eigen::SparseMatrix<double>& A, int pattern_versi
   return k.numeric != nullptr && k.common.status == KLU_OK;
 }
 
+void SparseLu::ForgetPivots() { impl_->FreeNumeric(); }
+
 bool SparseLu::Solve(Eigen::VectorXd* b) {
   Impl& k = *impl_;
   if (!k.numeric || b->size() != k.n) return false;

@@ -105,4 +105,25 @@ ClosestPointsResult FindClosestPoints(const ConvexShape& shape1, const Pose& X_W
   return ComputeClosestPoints(shape1, X_WB1, shape2, X_WB2);
 }
 
+// See support.h.
+int MostActiveInequality(const ConvexShape& shape, const Pose& X_WB, const Vec3& p_W, Vec3* normal_W,
+                         double* grad_norm) {
+  const Pose X_WS = X_WB * shape.X_BS;
+  const Vec3 x_S = X_WS.inverse() * p_W;
+  int best = 0;
+  double best_f = -1e300;
+  for (int k = 0; k < static_cast<int>(shape.inequalities.size()); ++k) {
+    double f;
+    Vec3 g_S;
+    shape.inequalities[k].Evaluate(x_S, &f, &g_S, nullptr);
+    if (f > best_f && g_S.norm() > 1e-12) {
+      best_f = f;
+      best = k;
+      *grad_norm = g_S.norm();
+      *normal_W = X_WS.linear() * g_S / *grad_norm;
+    }
+  }
+  return best;
+}
+
 }  // namespace implicit_sim

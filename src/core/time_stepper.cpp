@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "implicit_sim/core/ipopt_ncp.h"
+#include "implicit_sim/core/step_health.h"
 #include "implicit_sim/core/support.h"
 
 namespace implicit_sim {
@@ -29,7 +30,26 @@ bool StepperOptions::IsValid(std::string* error) const {
     *error = "contact_threshold must be finite and >= 0 N, got " + std::to_string(contact_threshold);
     return false;
   }
+  if (!(max_speed > 0.0 && max_speed <= 1e12) || !(max_angular_speed > 0.0 && max_angular_speed <= 1e12)) {
+    *error = "max_speed and max_angular_speed must be in (0, 1e12] (m/s, rad/s)";
+    return false;
+  }
+  if (!(overlap_tolerance >= 0.0 && overlap_tolerance <= 1.0)) {
+    *error = "overlap_tolerance must be in [0, 1] m";
+    return false;
+  }
   return newton.IsValid(error);
+}
+
+const char* StepFaultName(StepFault fault) {
+  switch (fault) {
+    case StepFault::kNone: return "none";
+    case StepFault::kNotConverged: return "not_converged";
+    case StepFault::kNoFiniteSolution: return "no_finite_solution";
+    case StepFault::kInitialOverlap: return "initial_overlap";
+    case StepFault::kDiverged: return "diverged";
+  }
+  return "unknown";
 }
 
 Data::Data(const Model& model, PairSelection selection)
@@ -48,31 +68,11 @@ Data::Data(const Model& model, PairSelection selection)
       inflation(model.bodies.size(), 0.0),
       contacts(problem.blocks().size()) {
   for (size_t c = 0; c < contacts.size(); ++c) contacts[c].pair = problem.blocks()[c].pair;
-  problem.set_regular_separated_friction(sparse);
+  axes_warm_failed.reserve(model.pairs.size());  // a cold restart keeps the failed warm axes without allocating
+  problem.set_regular_separated_friction(true);  // keeps the Newton matrix regular at separated pairs
 }
 
 namespace {
-
-// The index of the inequality of `shape` (posed by X_WB) that is largest at p_W, and its unit outward normal.
-int MostActiveInequality(const ConvexShape& shape, const Pose& X_WB, const Vec3& p_W, Vec3* normal_W,
-                         double* grad_norm) {
-  const Pose X_WS = X_WB * shape.X_BS;
-  const Vec3 x_S = X_WS.inverse() * p_W;
-  int best = 0;
-  double best_f = -1e300;
-  for (int k = 0; k < static_cast<int>(shape.inequalities.size()); ++k) {
-    double f;
-    Vec3 g_S;
-    shape.inequalities[k].Evaluate(x_S, &f, &g_S, nullptr);
-    if (f > best_f && g_S.norm() > 1e-12) {
-      best_f = f;
-      best = k;
-      *grad_norm = g_S.norm();
-      *normal_W = X_WS.linear() * g_S / *grad_norm;
-    }
-  }
-  return best;
-}
 
 void WriteState(const Model& model, const StepProblem& problem, const Eigen::VectorXd& z, double h, State* state) {
   for (int k = 0; k < model.num_moving(); ++k) {
@@ -332,6 +332,46 @@ bool Advance(const Model& model, const StepperOptions& options, double h, int de
 
 }  // namespace
 
+void SaveWarmStart(const Data& data, WarmStart* out) {
+  out->valid = data.has_warm_start;
+  ActivePairs(data.problem, &out->pairs);
+  out->z = data.z;
+  out->tangent_axes = data.problem.tangent_axes();
+}
+
+void RestoreWarmStart(const Model& model, const WarmStart& saved, Data* data) {
+  const bool pairs_ok = std::is_sorted(saved.pairs.begin(), saved.pairs.end()) &&
+                        std::adjacent_find(saved.pairs.begin(), saved.pairs.end()) == saved.pairs.end() &&
+                        std::all_of(saved.pairs.begin(), saved.pairs.end(), [&](int p) {
+                          return p >= 0 && p < static_cast<int>(model.pairs.size());
+                        }) &&
+                        (data->broad_phase || saved.pairs.size() == model.pairs.size());
+  if (!pairs_ok || saved.tangent_axes.size() != saved.pairs.size()) {
+    throw std::invalid_argument("warm start does not belong to this model (pairs or tangent axes)");
+  }
+  if (data->broad_phase) {
+    ActivePairs(data->problem, &data->pairs);
+    LayOut(saved.pairs, nullptr, data);
+  }
+  if (saved.z.size() != data->problem.size()) {
+    const int expected = data->problem.size();
+    if (data->broad_phase) LayOut(data->pairs, nullptr, data);  // back to the layout of data->z
+    throw std::invalid_argument("warm start does not belong to this model: z has " + std::to_string(saved.z.size()) +
+                                " values, the step problem " + std::to_string(expected));
+  }
+  data->z = saved.z;
+  data->problem.set_tangent_axes(saved.tangent_axes);
+  data->has_warm_start = saved.valid;
+}
+
+void ClearWarmStart(Data* data) {
+  if (data->broad_phase) LayOut({}, nullptr, data);
+  data->z.setZero(data->problem.size());
+  data->z_start.setZero(data->problem.size());
+  data->has_warm_start = false;
+  data->forced_pairs.clear();
+}
+
 StepReport Step(const Model& model, const StepperOptions& options, State* state, Data* data,
                 const Eigen::VectorXd* external_wrench_W) {
   std::string error;
@@ -348,9 +388,29 @@ StepReport Step(const Model& model, const StepperOptions& options, State* state,
   const auto wall_start = std::chrono::steady_clock::now();
   StepReport report;
   report.converged = true;
+  if (!data->has_warm_start && FindInitialOverlap(model, *state, options.overlap_tolerance, &data->broad,
+                                                  &data->X_WB, &data->inflation, &data->candidates,
+                                                  &report.fault_detail)) {
+    report.converged = false;
+    report.fault = StepFault::kInitialOverlap;
+    return report;
+  }
+  data->state_backup = *state;
   const double t_end = state->t + options.h;
   report.advanced = Advance(model, options, options.h, 0, external_wrench_W, state, data, &report);
-  if (report.advanced) state->t = t_end;  // exactly t + h, whatever the sub-steps summed to
+  if (report.advanced && FindDivergence(model, *state, options.max_speed, options.max_angular_speed,
+                                        &report.fault_detail)) {
+    report.advanced = report.converged = false;
+    report.fault = StepFault::kDiverged;
+  }
+  if (!report.advanced) {
+    *state = data->state_backup;  // also undoes a first half-step whose second half failed
+    data->has_warm_start = false;
+    if (report.fault == StepFault::kNone) report.fault = StepFault::kNoFiniteSolution;
+  } else {
+    state->t = t_end;  // exactly t + h, whatever the sub-steps summed to
+    if (!report.converged) report.fault = StepFault::kNotConverged;
+  }
   for (const ContactResult& contact : data->contacts) {
     if (contact.normal_force > options.contact_threshold) ++report.active_contacts;
   }

@@ -197,7 +197,7 @@ void SimNode::StepLocked() {
   if (!report.converged) ++diag_nonconverged_;
   if (!report.advanced) {  // never publish NaN: keep the last good state and pause
     state_ = backup_;
-    data_.has_warm_start = false;
+    ClearWarmStart(&data_);
     paused_ = true;
     ++diag_failed_;
     if (last_failure_.empty()) last_failure_ = "no finite solution at t = " + std::to_string(SimTime()) + " s";
@@ -414,7 +414,7 @@ bool SimNode::OnReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& 
   std::lock_guard<std::mutex> lock(mutex_);
   time_offset_ = SimTime();  // simulation time keeps increasing; bodies return to their initial state
   state_ = initial_state_;
-  data_.has_warm_start = false;
+  ClearWarmStart(&data_);
   data_.contacts.clear();
   wrenches_.clear();
   commanded_W_.setZero();
@@ -482,7 +482,7 @@ bool SimNode::OnSetBodyState(implicit_sim::SetBodyState::Request& req, implicit_
   std::string error;
   const int b = FindBodyOrFail(req.state.name, true, &error);
   res.success = b >= 0 && conv::SetBodyStateFromMsg(model_, b, req.state, &state_, &error);
-  if (res.success) data_.has_warm_start = false;  // the next step starts cold from the new configuration
+  if (res.success) ClearWarmStart(&data_);  // the next step starts cold from the new configuration
   res.message = res.success ? "set '" + req.state.name + "'" : error;
   return true;
 }

@@ -21,4 +21,9 @@ bool ClosedFormClosestPoints(const ConvexShape& shape1, const Pose& X_WB1, const
 ClosestPointsResult FindClosestPoints(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2,
                                       const Pose& X_WB2);
 
+// The index of the inequality of `shape` (posed by X_WB) that is largest at p_W, its unit outward normal (world)
+// and the norm of its gradient there.
+int MostActiveInequality(const ConvexShape& shape, const Pose& X_WB, const Vec3& p_W, Vec3* normal_W,
+                         double* grad_norm);
+
 }  // namespace implicit_sim

@@ -30,8 +30,25 @@ struct StepperOptions {
   // Broad phase (when Data uses one): a pair enters the NCP when the bounding spheres of its bodies, each grown by the
   // motion possible within the step (h |v| + h |w| |offset| + |g| h^2 / 2) plus this margin, overlap. (m, [0, 10])
   double broad_phase_margin = 0.005;
+  // Health checks (see StepFault). A step whose end velocities exceed these diverged (m/s, rad/s; (0, 1e12]).
+  double max_speed = 1e3;
+  double max_angular_speed = 1e4;
+  // A cold step (the first, or after a reset or a set state) refuses to start from bodies overlapping by more than
+  // this (m, [0, 1]): the step's end-of-step contact would throw them apart with an impulse of overlap / h.
+  double overlap_tolerance = 1e-6;
   bool IsValid(std::string* error) const;
 };
+
+// Why a step was not accepted as a good one. With kInitialOverlap, kDiverged and kNoFiniteSolution the state is left
+// exactly as it was before the step (StepReport::advanced is false).
+enum class StepFault {
+  kNone,
+  kNotConverged,      // advanced with the best iterate found, reported as not converged (the retry ladder ran out)
+  kNoFiniteSolution,  // every rung produced non-finite values
+  kInitialOverlap,    // a cold step started with two bodies overlapping by more than overlap_tolerance
+  kDiverged,          // the end velocities exceed max_speed or max_angular_speed
+};
+const char* StepFaultName(StepFault fault);  // "none", "not_converged", "no_finite_solution", "initial_overlap", "diverged"
 
 struct StepReport {
   bool converged = false;       // the NCP (every sub-step's, if the step was split) was solved to tolerance
@@ -47,6 +64,8 @@ struct StepReport {
   double complementarity_error = 0.0;
   int active_contacts = 0;      // pairs with normal force > contact_threshold
   double wall_time_s = 0.0;
+  StepFault fault = StepFault::kNone;
+  std::string fault_detail;     // which pair overlaps or which body diverged, with the numbers (empty without fault)
 };
 
 class Data {
@@ -80,12 +99,31 @@ class Data {
   std::vector<Pose> X_WB;
   std::vector<double> inflation;
   Eigen::VectorXd z_remap;
+  State state_backup;  // the state before the step, restored when the step is not accepted
   // The contact results of the last step: one per pair in its NCP (contacts[i].pair is the model pair). With every
   // pair in the NCP, contacts[c] belongs to model pair c.
   std::vector<ContactResult> contacts;
 };
 
-// Advances *state by one step of options.h. `external_wrench_W`, if given, holds 6 values per moving body slot:
+// Everything a step reads besides the State: whether there is a warm start, the previous solution z (velocities,
+// closest points, normals, multipliers), the pairs z is laid out for and the friction tangent axes. A step is a
+// function of (State, WarmStart) alone (the sparse LU chooses its pivots afresh in every solve), so saving both and
+// restoring them continues a run bit-identically.
+struct WarmStart {
+  bool valid = false;
+  std::vector<int> pairs;  // model pair indices, ascending
+  Eigen::VectorXd z;
+  std::vector<Vec3> tangent_axes;
+};
+void SaveWarmStart(const Data& data, WarmStart* out);
+// Throws std::invalid_argument (and changes nothing) if `saved` was not taken from a Data of this model.
+void RestoreWarmStart(const Model& model, const WarmStart& saved, Data* data);
+// Forgets the warm start: the next step starts cold, exactly like the first step of a new Data (a reset).
+void ClearWarmStart(Data* data);
+
+// Advances *state by one step of options.h. A cold step (no warm start) first checks that no two bodies overlap; a
+// step whose end velocities exceed options.max_speed / max_angular_speed is undone. StepReport::fault says what went
+// wrong; the state is never left non-finite. `external_wrench_W`, if given, holds 6 values per moving body slot:
 // force (N) then torque (N m), world frame, at the centre of mass, constant over the step (added to the model's
 // constant applied wrench). Throws std::invalid_argument for invalid options, a state or wrench vector whose size
 // does not match the model, or a non-finite wrench (and then changes nothing); solver trouble is reported, never
