@@ -9,15 +9,16 @@
 namespace implicit_sim {
 namespace {
 
-// An upper bound on how deep the two bodies of `pair` overlap (m): 0 when their closest points are apart; otherwise
-// the crossing of the plane through the contact point on body 2's outward normal (distance_oracle.h), which is
-// positive whenever they overlap, since then no plane separates them.
-double OverlapBound(const Model& model, const State& state, const ContactPair& pair) {
+// An upper bound on how deep the two bodies of `pair` overlap (m): 0 when their closest points are more than
+// `tolerance` apart; otherwise the crossing of the plane through the contact point on body 2's outward normal
+// (distance_oracle.h), which is positive whenever they overlap, since then no plane separates them. (The oracle
+// reports overlapping bodies at a distance of about its own tolerance, not 0.)
+double OverlapBound(const Model& model, const State& state, const ContactPair& pair, double tolerance) {
   const Body& body1 = model.bodies[pair.body1];
   const Body& body2 = model.bodies[pair.body2];
   const Pose X_WB1 = state.X_WB(model, pair.body1), X_WB2 = state.X_WB(model, pair.body2);
   const ClosestPointsResult cp = FindClosestPoints(body1.shape, X_WB1, body2.shape, X_WB2);
-  if (cp.solved && cp.distance > 0.0) return 0.0;
+  if (cp.solved && cp.distance > tolerance) return 0.0;
   Vec3 normal_W = Vec3::UnitZ();
   double grad_norm;
   MostActiveInequality(body2.shape, X_WB2, cp.p_W2, &normal_W, &grad_norm);
@@ -35,7 +36,7 @@ bool FindInitialOverlap(const Model& model, const State& state, double tolerance
   }
   broad->FindPairs(*X_WB, *inflation, candidates);
   for (int p : *candidates) {
-    const double depth = OverlapBound(model, state, model.pairs[p]);
+    const double depth = OverlapBound(model, state, model.pairs[p], tolerance);
     if (depth > tolerance) {
       *detail = "pair '" + model.PairName(p) + "' overlaps by up to " + FormatNumber(depth) + " m at t = " +
                 FormatNumber(state.t) + " s (overlap_tolerance " + FormatNumber(tolerance) + " m)";

@@ -140,7 +140,8 @@ int main(int argc, char** argv) {
     for (long i = 0; i < steps; ++i) {
       const StepReport report = Step(model, options, &state, &data);
       if (!report.advanced) {
-        std::cerr << "implicit_sim_run: step " << i + 1 << " found no finite solution; stopping at t = "
+        std::cerr << "implicit_sim_run: step " << i + 1 << " refused (" << StepFaultName(report.fault)
+                  << (report.fault_detail.empty() ? "" : ": " + report.fault_detail) << "); stopping at t = "
                   << FormatNumber(state.t) << " s\n";
         break;
       }

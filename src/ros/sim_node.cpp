@@ -71,6 +71,10 @@ NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
   p.publish_rate = ReadParam(pnh, "publish_rate", p.publish_rate);
   p.real_time_factor = ReadParam(pnh, "real_time_factor", p.real_time_factor);
   p.paused = ReadParam(pnh, "paused", p.paused);
+  p.on_fault = ReadParam(pnh, "on_fault", p.on_fault);
+  if (p.on_fault != "pause" && p.on_fault != "reset") {
+    throw std::invalid_argument("parameter ~on_fault = '" + p.on_fault + "' must be pause or reset");
+  }
   p.world_frame = ReadParam(pnh, "world_frame", p.world_frame);
   p.force_marker_scale = ReadParam(pnh, "force_marker_scale", p.force_marker_scale);
   p.contact_marker_size = ReadParam(pnh, "contact_marker_size", p.contact_marker_size);
@@ -189,21 +193,46 @@ void SimNode::StepLocked() {
     report = Step(model_, options_, &state_, &data_, &wrench_W_);
   } catch (const std::exception& e) {
     report.advanced = false;
-    last_failure_ = e.what();
+    report.fault = StepFault::kNoFiniteSolution;
+    report.fault_detail = e.what();
   }
-  if (report.advanced && (!state_.q.allFinite() || !state_.v.allFinite())) report.advanced = false;
+  if (report.advanced && (!state_.q.allFinite() || !state_.v.allFinite())) {
+    report.advanced = false;
+    report.fault = StepFault::kNoFiniteSolution;
+  }
   ++step_count_;
   ++diag_steps_;
+  ++faults_[static_cast<int>(report.fault)];
   if (!report.converged) ++diag_nonconverged_;
-  if (!report.advanced) {  // never publish NaN: keep the last good state and pause
-    state_ = backup_;
-    ClearWarmStart(&data_);
-    paused_ = true;
-    ++diag_failed_;
-    if (last_failure_.empty()) last_failure_ = "no finite solution at t = " + std::to_string(SimTime()) + " s";
-    ROS_ERROR("implicit_sim: step failed (%s); the simulation is paused", last_failure_.c_str());
-  }
   last_report_ = report;
+  if (report.advanced) {
+    at_initial_state_ = false;
+    return;
+  }
+  // Never publish NaN: restore the last good state, warn once, then pause or reset.
+  state_ = backup_;
+  ClearWarmStart(&data_);
+  ++diag_failed_;
+  last_failure_ = std::string(StepFaultName(report.fault)) + (report.fault_detail.empty() ? "" : ": ") +
+                  report.fault_detail;
+  if (params_.on_fault == "reset" && !at_initial_state_) {
+    ROS_WARN("implicit_sim: step refused (%s); bodies reset to their initial state", last_failure_.c_str());
+    ResetLocked();
+  } else {
+    paused_ = true;
+    ROS_ERROR("implicit_sim: step refused (%s); the simulation is paused", last_failure_.c_str());
+  }
+}
+
+void SimNode::ResetLocked() {
+  time_offset_ = SimTime();  // simulation time keeps increasing; bodies return to their initial state
+  state_ = initial_state_;
+  ClearWarmStart(&data_);
+  data_.contacts.clear();
+  wrenches_.clear();
+  commanded_W_.setZero();
+  restart_pacing_ = true;
+  at_initial_state_ = true;
 }
 
 void SimNode::PhysicsLoop() {
@@ -360,7 +389,8 @@ void SimNode::PublishLoop() {
 void SimNode::UpdateDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (diag_failed_ > 0) {
-    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "step failed, simulation paused: " + last_failure_);
+    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR,
+                   std::string("step refused, ") + (paused_ ? "simulation paused: " : "bodies reset: ") + last_failure_);
   } else if (diag_nonconverged_ > 0) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "some steps did not converge");
   } else {
@@ -371,6 +401,10 @@ void SimNode::UpdateDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& sta
   status.add("nonconverged_steps_since_last_report", diag_nonconverged_);
   status.add("failed_steps_since_last_report", diag_failed_);
   status.add("dropped_wrench_commands", dropped_commands_);
+  for (StepFault fault : {StepFault::kNotConverged, StepFault::kNoFiniteSolution, StepFault::kInitialOverlap,
+                          StepFault::kDiverged}) {
+    status.add(std::string("faults_") + StepFaultName(fault), faults_[static_cast<int>(fault)]);
+  }
   status.add("real_time_factor", rtf_);
   status.add("last_iterations", last_report_.iterations);
   status.add("last_residual", last_report_.residual);
@@ -412,13 +446,8 @@ bool SimNode::OnUnpause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
 
 bool SimNode::OnReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
-  time_offset_ = SimTime();  // simulation time keeps increasing; bodies return to their initial state
-  state_ = initial_state_;
-  ClearWarmStart(&data_);
-  data_.contacts.clear();
-  wrenches_.clear();
-  commanded_W_.setZero();
-  restart_pacing_ = true;
+  ResetLocked();
+  last_failure_.clear();
   res.success = true;
   res.message = "bodies back to their initial state at t = " + std::to_string(SimTime()) + " s";
   return true;

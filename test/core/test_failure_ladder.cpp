@@ -1,6 +1,7 @@
 // The retry ladder under injected solver failures (an iteration limit of 1, an impossible tolerance): every rung is
 // counted, a failure is reported rather than thrown, and the state never becomes NaN.
 #include <cmath>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -32,6 +33,7 @@ TEST(FailureLadder, WhenEveryRungFailsEachIsCountedAndTheBestFiniteIterateIsKept
   EXPECT_TRUE(w.state.q.allFinite());
   EXPECT_TRUE(w.state.v.allFinite());
   EXPECT_TRUE(std::isfinite(report.residual));
+  EXPECT_EQ(report.fault, StepFault::kNotConverged);
   EXPECT_TRUE(Step(w.model, StepperOptions(), &w.state, &w.data).converged);  // normal settings recover
 }
 
@@ -56,6 +58,47 @@ TEST(FailureLadder, AnImpossibleToleranceIsReportedAsNotConvergedWithTheRightPhy
   EXPECT_TRUE(report.advanced);
   EXPECT_LT(report.residual, 1e-6);  // the accepted iterate is still a good one
   EXPECT_NEAR(state.v[5], 1.962 - 0.01 * 1.962, 1e-6);
+}
+
+// Two bodies overlapping where a run starts: the first (cold) step refuses to start, names the pair, and leaves the
+// state bit-identical; moving them apart lets the run go on.
+TEST(StepFaults, AnInitialOverlapIsRefusedInTheFirstStepAndChangesNothing) {
+  Model model = LoadSceneFromFile(testing_support::ScenePath("p3_sphere_on_two_spheres.urdf"));
+  Data data(model);
+  State state = State::Initial(model);
+  state.q[2] -= 0.01;  // the ball sinks 1 cm into both spheres
+  const State before = state;
+  const StepReport report = Step(model, StepperOptions(), &state, &data);
+  EXPECT_EQ(report.fault, StepFault::kInitialOverlap);
+  EXPECT_FALSE(report.advanced);
+  EXPECT_NE(report.fault_detail.find("ball-sphere_"), std::string::npos) << report.fault_detail;
+  EXPECT_EQ(state.t, before.t);
+  EXPECT_EQ(state.q, before.q);
+  EXPECT_EQ(state.v, before.v);
+  state.q[2] += 0.01;  // touching again, as the scene gives it: the check passes (no false alarm at contact)
+  const StepReport good = Step(model, StepperOptions(), &state, &data);
+  EXPECT_EQ(good.fault, StepFault::kNone);
+  EXPECT_TRUE(good.converged);
+}
+
+// v0 = 1e6 m/s: the first step is undone and reported as diverged; the state stays the finite one it was.
+TEST(StepFaults, AVelocityOfAMillionMetresPerSecondIsDetectedInTheSameStep) {
+  const Model model = LoadSceneFromFile(testing_support::ScenePath("p2_sphere_spinning.urdf"));
+  Data data(model);
+  State state = State::Initial(model);
+  state.v[0] = 1e6;
+  const State before = state;
+  const StepReport report = Step(model, StepperOptions(), &state, &data);
+  EXPECT_EQ(report.fault, StepFault::kDiverged);
+  EXPECT_FALSE(report.advanced);
+  EXPECT_NE(report.fault_detail.find("'ball'"), std::string::npos) << report.fault_detail;
+  EXPECT_EQ(state.q, before.q);
+  EXPECT_EQ(state.v, before.v);
+  EXPECT_TRUE(state.q.allFinite() && state.v.allFinite());
+  StepperOptions bad;
+  bad.max_speed = 0.0;
+  EXPECT_THROW(Step(model, bad, &state, &data), std::invalid_argument);
+  EXPECT_EQ(std::string(StepFaultName(StepFault::kDiverged)), "diverged");
 }
 
 }  // namespace

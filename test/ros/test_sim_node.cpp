@@ -260,6 +260,32 @@ TEST(SimNode, BadServiceCallsAreRefusedAndChangeNothing) {
   ExpectSameState(Ball(), before);
 }
 
+// A body set to 1e6 m/s: the next step is refused as diverged in that same step, the state stays as it was set
+// (finite), the node stays paused, and the fault is counted in /diagnostics.
+TEST(SimNode, ADivergingStepIsRefusedCountedAndChangesNothing) {
+  EXPECT_TRUE(Trigger("reset"));
+  implicit_sim::SetBodyState set;
+  set.request.state = Ball();
+  set.request.state.twist.linear.x = 1e6;
+  ASSERT_TRUE(Call(std::string("set_body_state"), set).response.success);
+  const implicit_sim::BodyState before = Ball();
+  const StepSrv step = RunSteps(1);
+  EXPECT_FALSE(step.response.success);
+  EXPECT_NE(step.response.message.find("diverged"), std::string::npos) << step.response.message;
+  ExpectSameState(Ball(), before);
+  EXPECT_TRUE(std::isfinite(Ball().pose.position.x));
+  bool counted = false;
+  for (int i = 0; i < 30 && !counted; ++i) {
+    const auto diagnostics =
+        ros::topic::waitForMessage<diagnostic_msgs::DiagnosticArray>("/diagnostics", ros::Duration(5));
+    ASSERT_TRUE(diagnostics != nullptr);
+    for (const auto& kv : diagnostics->status[0].values) counted |= kv.key == "faults_diverged" && kv.value == "1";
+  }
+  EXPECT_TRUE(counted);
+  EXPECT_TRUE(Trigger("reset"));
+  EXPECT_TRUE(RunSteps(5).response.success);  // a reset recovers
+}
+
 TEST(SimNode, StepIsRefusedWhileRunning) {
   EXPECT_TRUE(Trigger("unpause"));
   const StepSrv s = RunSteps(1);

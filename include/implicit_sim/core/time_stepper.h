@@ -31,8 +31,8 @@ struct StepperOptions {
   // motion possible within the step (h |v| + h |w| |offset| + |g| h^2 / 2) plus this margin, overlap. (m, [0, 10])
   double broad_phase_margin = 0.005;
   // Health checks (see StepFault). A step whose end velocities exceed these diverged (m/s, rad/s; (0, 1e12]).
-  double max_speed = 1e3;
-  double max_angular_speed = 1e4;
+  double max_speed = 1e5;
+  double max_angular_speed = 1e6;
   // A cold step (the first, or after a reset or a set state) refuses to start from bodies overlapping by more than
   // this (m, [0, 1]): the step's end-of-step contact would throw them apart with an impulse of overlap / h.
   double overlap_tolerance = 1e-6;

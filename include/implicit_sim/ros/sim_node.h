@@ -36,6 +36,10 @@ struct NodeParams {
   double publish_rate = 30.0;     // Hz, (0, 1000]: /tf, ~body_states, ~contacts, ~markers
   double real_time_factor = 1.0;  // [0, 1000]; 0 = as fast as possible
   bool paused = false;
+  // What a refused step (initial overlap, divergence, no finite solution) does after the state is restored: "pause"
+  // the simulation, or "reset" the bodies to their initial state and run on (pausing instead if the initial state
+  // itself is refused).
+  std::string on_fault = "pause";
   std::string world_frame = "world";
   double force_marker_scale = 0.05;  // m/N, (0, 100]: length of a contact force arrow per newton
   double contact_marker_size = 0.05;  // m, (0, 100]: diameter of a contact point (arrows scale with it)
@@ -61,6 +65,7 @@ class SimNode {
 
   double SimTime() const { return time_offset_ + state_.t; }
   void StepLocked();                 // one step with the active wrenches; mutex held
+  void ResetLocked();                // bodies back to the initial state, warm start and wrenches cleared; mutex held
   void ComputeWrenchesLocked();      // fills wrench_W_ for the step starting now
   void PhysicsLoop();
   void PublishLoop();
@@ -97,6 +102,8 @@ class SimNode {
   Eigen::VectorXd commanded_W_;   // ~wrench_cmd, per moving slot: force, torque at the link origin (world)
   Eigen::VectorXd wrench_W_;      // the wrench vector handed to the core (at the centre of mass)
   long diag_steps_ = 0, diag_nonconverged_ = 0, diag_failed_ = 0, dropped_commands_ = 0;
+  long faults_[5] = {0, 0, 0, 0, 0};  // refused or non-converged steps since startup, by StepFault
+  bool at_initial_state_ = true;      // no step taken since startup or the last reset
   double rtf_ = 0.0;
   std::string last_failure_;
 
