@@ -312,14 +312,17 @@ void CheckUrdfStructure(const tinyxml2::XMLElement* robot, const std::string& sc
     if (!name || !*name) Fail(scene + ": a <joint> has no name");
     const std::string joint = "joint '" + std::string(name) + "'";
     if (!joints.insert(name).second) Fail(joint + " is defined more than once");
-    std::string child;
+    std::string parent, child;
     for (const char* end : {"parent", "child"}) {
       const tinyxml2::XMLElement* e = j->FirstChildElement(end);
       const char* link = e ? e->Attribute("link") : nullptr;
       if (!link) Fail(joint + ": missing <" + end + " link=\"...\"/>");
       if (!links.count(link)) Fail(joint + ": <" + end + "> link '" + link + "' is not defined");
+      parent = child;
       child = link;
     }
+    // urdfdom leaks the model it was building on a self-joint (found by the fuzz harness): refuse it first.
+    if (parent == child) Fail(joint + ": <parent> and <child> are the same link '" + child + "'");
     CheckOrigin(j, joint + " (of link '" + child + "')");  // the origin is the link's initial pose
   }
 }
