@@ -19,6 +19,17 @@ namespace implicit_sim {
 namespace conv = ros_conversions;
 namespace {
 
+constexpr double kMaxWrench = 1e9;  // N and N m: larger commands are refused (they only drive a step into divergence)
+
+// Sets *error when a commanded force (N) or torque (N m) is non-finite or larger than kMaxWrench.
+void CheckWrenchValues(const Vec3& force, const Vec3& torque, std::string* error) {
+  if (!force.allFinite() || !torque.allFinite()) {
+    *error = "wrench must be finite";
+  } else if (force.norm() > kMaxWrench || torque.norm() > kMaxWrench) {
+    *error = "wrench too large: |force| and |torque| must be <= 1e9 (N, N m)";
+  }
+}
+
 using WallClock = std::chrono::steady_clock;
 
 template <typename T>
@@ -400,6 +411,7 @@ void SimNode::UpdateDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& sta
   status.add("steps_since_last_report", diag_steps_);
   status.add("nonconverged_steps_since_last_report", diag_nonconverged_);
   status.add("failed_steps_since_last_report", diag_failed_);
+  status.add("received_wrench_commands", received_commands_);
   status.add("dropped_wrench_commands", dropped_commands_);
   for (StepFault fault : {StepFault::kNotConverged, StepFault::kNoFiniteSolution, StepFault::kInitialOverlap,
                           StepFault::kDiverged}) {
@@ -529,10 +541,10 @@ bool SimNode::OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req,
   }
   TimedWrench w{b, frame_body, conv::ToVec3(req.reference_point), conv::ToVec3(req.wrench.force),
                 conv::ToVec3(req.wrench.torque), std::max(req.start_time, SimTime()), -1.0};
-  if (error.empty() && (!w.point.allFinite() || !w.force.allFinite() || !w.torque.allFinite() ||
-                        !std::isfinite(req.start_time) || !std::isfinite(req.duration))) {
-    error = "wrench, reference_point, start_time and duration must be finite";
+  if (error.empty() && (!w.point.allFinite() || !std::isfinite(req.start_time) || !std::isfinite(req.duration))) {
+    error = "reference_point, start_time and duration must be finite";
   }
+  if (error.empty()) CheckWrenchValues(w.force, w.torque, &error);
   if (error.empty() && req.duration == 0.0) error = "duration must be > 0 s, or < 0 for until cleared";
   if (!error.empty()) {
     res.message = error;
@@ -548,9 +560,10 @@ bool SimNode::OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req,
 void SimNode::OnWrenchCommand(const implicit_sim::BodyWrench::ConstPtr& msg) {
   const Vec3 f = conv::ToVec3(msg->wrench.force), tau = conv::ToVec3(msg->wrench.torque);
   std::lock_guard<std::mutex> lock(mutex_);
+  ++received_commands_;
   std::string error;
   const int b = FindBodyOrFail(msg->body, true, &error);
-  if (b >= 0 && (!f.allFinite() || !tau.allFinite())) error = "non-finite wrench for '" + msg->body + "'";
+  if (b >= 0) CheckWrenchValues(f, tau, &error);
   if (!error.empty()) {
     ++dropped_commands_;
     ROS_WARN_THROTTLE(1.0, "implicit_sim: dropped ~wrench_cmd: %s (%ld dropped so far)", error.c_str(),

@@ -101,7 +101,7 @@ class SimNode {
   std::vector<TimedWrench> wrenches_;
   Eigen::VectorXd commanded_W_;   // ~wrench_cmd, per moving slot: force, torque at the link origin (world)
   Eigen::VectorXd wrench_W_;      // the wrench vector handed to the core (at the centre of mass)
-  long diag_steps_ = 0, diag_nonconverged_ = 0, diag_failed_ = 0, dropped_commands_ = 0;
+  long diag_steps_ = 0, diag_nonconverged_ = 0, diag_failed_ = 0, dropped_commands_ = 0, received_commands_ = 0;
   long faults_[5] = {0, 0, 0, 0, 0};  // refused or non-converged steps since startup, by StepFault
   bool at_initial_state_ = true;      // no step taken since startup or the last reset
   double rtf_ = 0.0;
