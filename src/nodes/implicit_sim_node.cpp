@@ -1,4 +1,5 @@
 // implicit_sim_node: the simulator as a ROS node (see README.md for topics, services and parameters).
+#include <csignal>
 #include <iostream>
 
 #include <ros/ros.h>
@@ -7,6 +8,8 @@
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "implicit_sim");
+  // SIGTERM (systemd, docker stop, kill) shuts down like SIGINT: threads joined, exit code 0.
+  std::signal(SIGTERM, [](int) { ros::requestShutdown(); });
   try {
     implicit_sim::SimNode node(ros::NodeHandle(), ros::NodeHandle("~"));
     node.Run();

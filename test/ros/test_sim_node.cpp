@@ -1,6 +1,7 @@
 // rostest for implicit_sim_node on the P3 scene (test/ros/sim_node_p3.test starts it paused, as fast as possible).
 // The tests share one node; each one that needs the initial state calls ~reset first.
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <atomic>
@@ -9,9 +10,11 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
 #include <std_srvs/Trigger.h>
@@ -430,6 +433,87 @@ TEST(SimNode, TenThousandBadWrenchCommandsAreDroppedCountedAndHarmless) {
   EXPECT_EQ(non_finite.load(), 0);
   const implicit_sim::BodyState ball = Ball();
   EXPECT_TRUE(std::isfinite(ball.pose.position.x + ball.pose.position.z + ball.twist.linear.x));
+  EXPECT_TRUE(Trigger("reset"));
+}
+
+// The node binary next to this test's (devel/lib/implicit_sim/).
+std::string NodeBinary() {
+  char path[4096];
+  const ssize_t n = readlink("/proc/self/exe", path, sizeof(path) - 1);
+  const std::string self(path, n > 0 ? n : 0);
+  return self.substr(0, self.rfind('/')) + "/implicit_sim_node";
+}
+
+std::string SignalShutdown() {
+  return "/usr/bin/python3 " + std::string(IMPLICIT_SIM_SOURCE_DIR) + "/test/ros/signal_shutdown.py ";
+}
+
+// A subscriber that drops what it gets (queue 1).
+template <class Message>
+ros::Subscriber Ignore(ros::NodeHandle& nh, const std::string& topic) {
+  return nh.subscribe<Message>(topic, 1, boost::function<void(const typename Message::ConstPtr&)>(
+                                             [](const typename Message::ConstPtr&) {}));
+}
+
+// SIGINT and SIGTERM stop a second node instance (running as fast as possible) within 2 s with exit code 0.
+TEST(SimNode, SigintAndSigtermShutDownCleanlyWithinTwoSeconds) {
+  for (const char* signal : {"INT", "TERM"}) {
+    SCOPED_TRACE(signal);
+    const std::string node = std::string("/signal_test_") + signal;
+    int code = 0;
+    const std::string out = RunCommand(
+        SignalShutdown() + signal + " 'contact pairs' " + NodeBinary() + " __name:=" + node.substr(1) +
+            " _scene:=p3_sphere_on_two_spheres _scenes_dir:=" + IMPLICIT_SIM_SOURCE_DIR + "/scenes _real_time_factor:=0",
+        &code);
+    int exit_code = -1, ms = -1;
+    ASSERT_EQ(std::sscanf(out.substr(out.rfind("exit=")).c_str(), "exit=%d ms=%d", &exit_code, &ms), 2) << out;
+    EXPECT_EQ(exit_code, 0) << out;
+    EXPECT_LT(ms, 2000) << out;
+  }
+}
+
+// 50 subscribe / unsubscribe cycles on every topic, plus one subscriber whose queue is never spun, while the
+// simulation runs: it keeps stepping and the node's resident memory grows by less than 5 MB.
+TEST(SimNode, SubscriberChurnAndAStalledSubscriberLeaveStepsAndMemoryAlone) {
+  auto node_rss_kb = []() {
+    int code = 0;
+    const std::string out = RunCommand(
+        "pid=$(pgrep -f 'implicit_sim_node.*__name:=implicit_sim' | head -1); grep VmRSS /proc/$pid/status", &code);
+    long kb = -1;
+    const size_t at = out.find("VmRSS:");
+    if (at != std::string::npos) kb = std::stol(out.substr(at + 6));
+    return kb;
+  };
+  ros::NodeHandle nh;
+  ros::CallbackQueue never_spun;
+  ros::NodeHandle stalled_nh;
+  stalled_nh.setCallbackQueue(&never_spun);
+  ros::Subscriber stalled = Ignore<implicit_sim::BodyStates>(stalled_nh, kNs + "body_states");
+  EXPECT_TRUE(Trigger("reset"));
+  EXPECT_TRUE(Trigger("unpause"));
+  ros::WallDuration(1.0).sleep();
+  const long rss_before = node_rss_kb();
+  const double t_before = ClockNow();
+  for (int cycle = 0; cycle < 50; ++cycle) {
+    std::vector<ros::Subscriber> subscribers;
+    subscribers.push_back(Ignore<implicit_sim::Contacts>(nh, kNs + "contacts"));
+    subscribers.push_back(Ignore<visualization_msgs::MarkerArray>(nh, kNs + "markers"));
+    subscribers.push_back(Ignore<implicit_sim::StepStats>(nh, kNs + "step_stats"));
+    subscribers.push_back(Ignore<implicit_sim::BodyStates>(nh, kNs + "body_states"));
+    subscribers.push_back(Ignore<tf2_msgs::TFMessage>(nh, "/tf"));
+    subscribers.push_back(Ignore<rosgraph_msgs::Clock>(nh, "/clock"));
+    ros::WallDuration(0.05).sleep();
+  }
+  ros::WallDuration(1.0).sleep();
+  const long rss_after = node_rss_kb();
+  const double t_after = ClockNow();
+  EXPECT_TRUE(Trigger("pause"));
+  ASSERT_GT(rss_before, 0);
+  ASSERT_GT(rss_after, 0);
+  std::printf("[ INFO ] node RSS %ld kB -> %ld kB over 50 subscriber cycles; sim time %.2f -> %.2f s\n", rss_before,
+              rss_after, t_before, t_after);
+  EXPECT_LT(rss_after - rss_before, 5 * 1024);
+  EXPECT_GT(t_after, t_before + 1.0);  // still stepping
   EXPECT_TRUE(Trigger("reset"));
 }
 
