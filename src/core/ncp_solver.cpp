@@ -1,5 +1,7 @@
 #include "implicit_sim/core/ncp_solver.h"
 
+#include "implicit_sim/core/run_output.h"  // FormatNumber: locale-independent numbers in messages
+
 #include <algorithm>
 #include <cmath>
 
@@ -7,7 +9,7 @@ namespace implicit_sim {
 
 bool NewtonOptions::IsValid(std::string* error) const {
   if (!(tolerance > 0.0 && tolerance < 1.0)) {
-    *error = "solver tolerance must be in (0, 1), got " + std::to_string(tolerance);
+    *error = "solver tolerance must be in (0, 1), got " + FormatNumber(tolerance);
     return false;
   }
   if (max_iterations < 1 || max_iterations > 100000) {
@@ -15,11 +17,11 @@ bool NewtonOptions::IsValid(std::string* error) const {
     return false;
   }
   if (!(sparse_regularization >= 0.0 && sparse_regularization < 1.0)) {
-    *error = "solver sparse_regularization must be in [0, 1), got " + std::to_string(sparse_regularization);
+    *error = "solver sparse_regularization must be in [0, 1), got " + FormatNumber(sparse_regularization);
     return false;
   }
   if (!(lm_damping >= 0.0 && lm_damping < 1.0)) {
-    *error = "solver lm_damping must be in [0, 1), got " + std::to_string(lm_damping);
+    *error = "solver lm_damping must be in [0, 1), got " + FormatNumber(lm_damping);
     return false;
   }
   return true;

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "implicit_sim/core/ipopt_ncp.h"
+#include "implicit_sim/core/run_output.h"
 #include "implicit_sim/core/step_health.h"
 #include "implicit_sim/core/support.h"
 
@@ -19,15 +20,15 @@ bool StepperOptions::IsValid(std::string* error) const {
     return false;
   }
   if (!(h > 0.0 && h <= 1.0)) {
-    *error = "time step h must be in (0, 1] s, got " + std::to_string(h);
+    *error = "time step h must be in (0, 1] s, got " + FormatNumber(h);
     return false;
   }
   if (!(broad_phase_margin >= 0.0 && broad_phase_margin <= 10.0)) {
-    *error = "broad_phase_margin must be in [0, 10] m, got " + std::to_string(broad_phase_margin);
+    *error = "broad_phase_margin must be in [0, 10] m, got " + FormatNumber(broad_phase_margin);
     return false;
   }
   if (!(contact_threshold >= 0.0 && std::isfinite(contact_threshold))) {
-    *error = "contact_threshold must be finite and >= 0 N, got " + std::to_string(contact_threshold);
+    *error = "contact_threshold must be finite and >= 0 N, got " + FormatNumber(contact_threshold);
     return false;
   }
   if (!(max_speed > 0.0 && max_speed <= 1e12) || !(max_angular_speed > 0.0 && max_angular_speed <= 1e12)) {

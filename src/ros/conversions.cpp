@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "implicit_sim/core/run_output.h"
+
 namespace implicit_sim {
 namespace ros_conversions {
 namespace {
@@ -130,7 +132,7 @@ bool SetBodyStateFromMsg(const Model& model, int body, const implicit_sim::BodyS
     return false;
   }
   if (q.norm() < 1e-9) {
-    *error = "orientation quaternion must be non-zero (got norm " + std::to_string(q.norm()) + ")";
+    *error = "orientation quaternion must be non-zero (got norm " + FormatNumber(q.norm()) + ")";
     return false;
   }
   Pose X_WL = Pose::Identity();

@@ -438,7 +438,7 @@ bool SimNode::OnPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& 
   std::lock_guard<std::mutex> lock(mutex_);
   paused_ = true;
   res.success = true;
-  res.message = "paused at t = " + std::to_string(SimTime()) + " s";
+  res.message = "paused at t = " + FormatNumber(SimTime()) + " s";
   return true;
 }
 
@@ -450,7 +450,7 @@ bool SimNode::OnUnpause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
     diag_failed_ = 0;
     last_failure_.clear();
     res.success = true;
-    res.message = "running from t = " + std::to_string(SimTime()) + " s";
+    res.message = "running from t = " + FormatNumber(SimTime()) + " s";
   }
   wake_.notify_all();
   return true;
@@ -461,7 +461,7 @@ bool SimNode::OnReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& 
   ResetLocked();
   last_failure_.clear();
   res.success = true;
-  res.message = "bodies back to their initial state at t = " + std::to_string(SimTime()) + " s";
+  res.message = "bodies back to their initial state at t = " + FormatNumber(SimTime()) + " s";
   return true;
 }
 
@@ -513,7 +513,7 @@ bool SimNode::OnGetBodyState(implicit_sim::GetBodyState::Request& req, implicit_
   std::string error;
   const int b = FindBodyOrFail(req.body, false, &error);
   res.success = b >= 0;
-  res.message = b >= 0 ? "t = " + std::to_string(SimTime()) + " s" : error;
+  res.message = b >= 0 ? "t = " + FormatNumber(SimTime()) + " s" : error;
   if (b >= 0) res.state = conv::ToBodyStateMsg(model_, state_, b);
   return true;
 }
@@ -553,7 +553,7 @@ bool SimNode::OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req,
   if (req.duration > 0.0) w.end = w.start + req.duration;
   wrenches_.push_back(w);
   res.success = true;
-  res.message = "wrench on '" + req.body + "' from t = " + std::to_string(w.start) + " s";
+  res.message = "wrench on '" + req.body + "' from t = " + FormatNumber(w.start) + " s";
   return true;
 }
 
