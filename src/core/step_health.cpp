@@ -1,5 +1,6 @@
 #include "implicit_sim/core/step_health.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "implicit_sim/core/distance_oracle.h"
@@ -22,7 +23,16 @@ double OverlapBound(const Model& model, const State& state, const ContactPair& p
   Vec3 normal_W = Vec3::UnitZ();
   double grad_norm;
   MostActiveInequality(body2.shape, X_WB2, cp.p_W2, &normal_W, &grad_norm);
-  return PenetrationBound(body1.shape, X_WB1, body2.shape, X_WB2, cp.p_W2, normal_W);
+  // How far each body crosses the plane through p_W2 on normal_W (distance_oracle.h's PenetrationBound), with
+  // closed-form support points where the shape has them (the oracle's support value solves an NLP, about 10 ms,
+  // except for a single half-space).
+  const auto support = [](const ConvexShape& shape, const Pose& X_WB, const Vec3& u_W) {
+    Vec3 p_W;
+    return SupportPoint(shape, X_WB, u_W, &p_W) ? u_W.dot(p_W) : SupportValue(shape, X_WB, u_W);
+  };
+  const double np = normal_W.dot(cp.p_W2);
+  return std::max(0.0, support(body2.shape, X_WB2, normal_W) - np) +
+         std::max(0.0, np + support(body1.shape, X_WB1, -normal_W));
 }
 
 }  // namespace
