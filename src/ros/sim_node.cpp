@@ -113,7 +113,7 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   options_.solver = params_.solver == "ipopt" ? StepperOptions::Solver::kIpopt : StepperOptions::Solver::kNewton;
   std::string error;
   if (!options_.IsValid(&error)) throw std::invalid_argument(error);
-  state_ = initial_state_ = backup_ = State::Initial(model_);
+  state_ = initial_state_ = State::Initial(model_);
   paused_ = params_.paused;
   commanded_W_ = Eigen::VectorXd::Zero(6 * model_.num_moving());
   wrench_W_ = Eigen::VectorXd::Zero(6 * model_.num_moving());
@@ -198,7 +198,6 @@ void SimNode::ComputeWrenchesLocked() {
 
 void SimNode::StepLocked() {
   ComputeWrenchesLocked();
-  backup_ = state_;
   StepReport report;
   try {
     report = Step(model_, options_, &state_, &data_, &wrench_W_);
@@ -206,10 +205,6 @@ void SimNode::StepLocked() {
     report.advanced = false;
     report.fault = StepFault::kNoFiniteSolution;
     report.fault_detail = e.what();
-  }
-  if (report.advanced && (!state_.q.allFinite() || !state_.v.allFinite())) {
-    report.advanced = false;
-    report.fault = StepFault::kNoFiniteSolution;
   }
   ++step_count_;
   ++diag_steps_;
@@ -220,9 +215,7 @@ void SimNode::StepLocked() {
     at_initial_state_ = false;
     return;
   }
-  // Never publish NaN: restore the last good state, warn once, then pause or reset.
-  state_ = backup_;
-  ClearWarmStart(&data_);
+  // Step left the last good state in place (it never publishes NaN): warn once, then pause or reset.
   ++diag_failed_;
   last_failure_ = std::string(StepFaultName(report.fault)) + (report.fault_detail.empty() ? "" : ": ") +
                   report.fault_detail;

@@ -43,6 +43,11 @@ struct Case {
   const char* name;
   Model model;
   double h;
+  StepperOptions options() const {
+    StepperOptions o;
+    o.h = h;
+    return o;
+  }
 };
 
 std::vector<Case> Cases() {
@@ -55,8 +60,7 @@ std::vector<Case> Cases() {
 TEST(Determinism, TheSameRunTwiceIsBitIdenticalOver10000Steps) {
   for (const Case& c : Cases()) {
     SCOPED_TRACE(c.name);
-    StepperOptions options;
-    options.h = c.h;
+    const StepperOptions options = c.options();
     State state1 = State::Initial(c.model), state2 = State::Initial(c.model);
     Data data1(c.model), data2(c.model);
     const std::vector<uint64_t> first = RunHashed(c.model, options, 10000, &state1, &data1);
@@ -70,8 +74,7 @@ TEST(Determinism, TheSameRunTwiceIsBitIdenticalOver10000Steps) {
 TEST(Determinism, ARunAfterAResetRepeatsTheFirstRun) {
   for (const Case& c : Cases()) {
     SCOPED_TRACE(c.name);
-    StepperOptions options;
-    options.h = c.h;
+    const StepperOptions options = c.options();
     Data data(c.model);
     State state = State::Initial(c.model);
     const std::vector<uint64_t> first = RunHashed(c.model, options, 2000, &state, &data);
@@ -85,8 +88,7 @@ TEST(Determinism, ARunAfterAResetRepeatsTheFirstRun) {
 TEST(Determinism, ARestoredStateAndWarmStartContinueBitIdentically) {
   for (const Case& c : Cases()) {
     SCOPED_TRACE(c.name);
-    StepperOptions options;
-    options.h = c.h;
+    const StepperOptions options = c.options();
     Data data(c.model);
     State state = State::Initial(c.model);
     RunHashed(c.model, options, 700, &state, &data);  // mid-run: in contact, warm

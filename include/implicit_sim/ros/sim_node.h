@@ -92,7 +92,7 @@ class SimNode {
   // Guarded by mutex_.
   mutable std::mutex mutex_;
   std::condition_variable wake_;
-  State state_, initial_state_, backup_;
+  State state_, initial_state_;
   Data data_;
   double time_offset_ = 0.0;      // simulation time = time_offset_ + state_.t (reset keeps time monotonic)
   bool paused_ = false, shutdown_ = false, restart_pacing_ = true;
