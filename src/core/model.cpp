@@ -13,6 +13,30 @@ int Model::FindBody(const std::string& name) const {
   return -1;
 }
 
+int Model::FindJoint(const std::string& name) const {
+  for (int i = 0; i < static_cast<int>(joints.size()); ++i) {
+    if (joints[i].name == name) return i;
+  }
+  return -1;
+}
+
+bool Model::Joined(int i, int j) const {
+  for (const Joint& joint : joints) {
+    if ((joint.parent == i && joint.child == j) || (joint.parent == j && joint.child == i)) return true;
+  }
+  return false;
+}
+
+const char* JointTypeName(JointType type) {
+  switch (type) {
+    case JointType::kFixed: return "fixed";
+    case JointType::kRevolute: return "revolute";
+    case JointType::kContinuous: return "continuous";
+    case JointType::kPrismatic: return "prismatic";
+  }
+  return "unknown";
+}
+
 int Model::PairIndex(int i, int j) const {
   if (i == j || i < 0 || j < 0 || i >= static_cast<int>(bodies.size()) || j >= static_cast<int>(bodies.size())) {
     return -1;

@@ -53,6 +53,13 @@ StepProblem::StepProblem(const Model& model, bool all_pairs)
     end_[b].col = k < 0 ? -1 : 6 * k;
     for (int i = 0; k >= 0 && i < 6; ++i) locked_row_[6 * k + i] = model.bodies[b].locked[i];
   }
+  pair_base_ = 6 * model.num_moving();
+  for (const Joint& joint : model.joints) {
+    joint_offset_.push_back(pair_base_);
+    pair_base_ += joint.size();
+  }
+  joint_equality_start_.resize(model.joints.size());
+  joint_position_start_.resize(model.joints.size());
   std::vector<int> pairs;
   for (int c = 0; all_pairs && c < static_cast<int>(model.pairs.size()); ++c) pairs.push_back(c);
   std::vector<int> new_blocks;
@@ -65,7 +72,7 @@ void StepProblem::SetActivePairs(const std::vector<int>& pairs, const Eigen::Vec
   const std::vector<PairBlock> old_blocks = blocks_;
   const std::vector<Vec3> old_axes = tangent_axis_;
   blocks_.clear();
-  size_ = 6 * model_.num_moving();
+  size_ = pair_base_;
   for (int pair : pairs) {
     PairBlock block;
     block.pair = pair;
@@ -78,6 +85,12 @@ void StepProblem::SetActivePairs(const std::vector<int>& pairs, const Eigen::Vec
   tangent_axis_.assign(blocks_.size(), Vec3::UnitX());
   raw_scratch_ = Eigen::VectorXd::Zero(size_);
   complementarity_kind_.assign(size_, 0);
+  for (size_t j = 0; j < model_.joints.size(); ++j) {
+    const Joint& joint = model_.joints[j];
+    const int extra = joint_offset_[j] + joint.num_equalities();
+    if (joint.limited) complementarity_kind_[extra] = complementarity_kind_[extra + 1] = 2;  // l / Fs _|_ distance
+    if (joint.friction > 0.0) complementarity_kind_[extra + (joint.limited ? 3 : 1)] = 1;  // sigma_f
+  }
   for (const PairBlock& blk : blocks_) {
     for (int i = blk.offset + pi::kAlpha; i < blk.offset + blk.size(); ++i) complementarity_kind_[i] = 1;
     complementarity_kind_[blk.ln()] = 2;  // the normal force enters as ln / Fs
@@ -86,7 +99,7 @@ void StepProblem::SetActivePairs(const std::vector<int>& pairs, const Eigen::Vec
   // Carry the old solution over: the body part, and the blocks of the pairs that stay (both lists are ascending).
   z_new->setZero(size_);
   new_blocks->clear();
-  if (z_old) z_new->head(6 * model_.num_moving()) = z_old->head(6 * model_.num_moving());
+  if (z_old) z_new->head(pair_base_) = z_old->head(pair_base_);
   size_t o = 0;
   for (size_t c = 0; c < blocks_.size(); ++c) {
     while (o < old_blocks.size() && old_blocks[o].pair < blocks_[c].pair) ++o;
@@ -127,6 +140,7 @@ void StepProblem::BeginStep(const Model& model, const State& start, double h,
     s.w0 = k < 0 ? Vec3::Zero() : start.w_WB(k);
     s.I_W0 = s.R0 * body.I_B * s.R0.transpose();
   }
+  BeginJoints();
 }
 
 void StepProblem::ResetTangentAxes(const Eigen::VectorXd& z) {
@@ -260,6 +274,7 @@ void StepProblem::EvaluateAll(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
   UpdateBodies(z);
   Phi->setZero(size_);
   AddBodyRows(z, Phi);
+  AddJointRows(z, Phi);
   for (size_t c = 0; c < blocks_.size(); ++c) AddPair(static_cast<int>(c), z, Phi);
   // Locked degrees of freedom: the row of a locked velocity becomes "velocity = 0" (AddJ skipped its other entries).
   for (int row = 0; row < static_cast<int>(locked_row_.size()); ++row) {

@@ -204,6 +204,7 @@ NewtonResult SolveStep(const Model& model, const StepperOptions& options, double
   if (data->broad_phase) SelectPairs(model, options, h, state, data);
   auto cold_guess = [&]() {
     data->z_start.head(6 * model.num_moving()) = state.v;
+    problem.SeedJoints(&data->z_start);
     for (int c = 0; c < static_cast<int>(problem.blocks().size()); ++c) SeedPair(model, state, c, problem, &data->z_start);
     problem.ResetTangentAxes(data->z_start);
     problem.SeedFriction(&data->z_start);

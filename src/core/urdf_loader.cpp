@@ -15,63 +15,19 @@
 #include <urdf_parser/urdf_parser.h>
 
 #include "implicit_sim/core/run_output.h"
+#include "loader_util.h"
+#include "urdf_joints.h"
 
 namespace implicit_sim {
+using namespace loader;
 namespace {
 
-[[noreturn]] void Fail(const std::string& message) { throw std::invalid_argument(message); }
 
 // Larger scene files are refused before parsing (bytes): 32 MiB holds about 60000 S1 pile bodies.
 constexpr size_t kMaxSceneBytes = size_t{32} << 20;
 
-// Numbers are read with the classic "C" locale whatever the process locale is.
-std::vector<double> ParseNumbers(const std::string& text, const std::string& what) {
-  std::istringstream in(text);
-  in.imbue(std::locale::classic());
-  std::vector<double> out;
-  std::string token;
-  while (in >> token) {
-    std::istringstream tin(token);
-    tin.imbue(std::locale::classic());
-    double value;
-    if (!(tin >> value) || !tin.eof()) Fail(what + ": '" + token + "' is not a finite number");
-    if (!std::isfinite(value)) Fail(what + ": value must be finite, got '" + token + "'");
-    out.push_back(value);
-  }
-  return out;
-}
 
-double ReadScalar(const tinyxml2::XMLElement* e, const char* name, const std::string& where, double lo, double hi,
-                  bool lo_open, double fallback, bool required) {
-  const char* text = e ? e->Attribute(name) : nullptr;
-  if (!text) {
-    if (required) Fail(where + ": missing attribute '" + name + "'");
-    return fallback;
-  }
-  const std::vector<double> v = ParseNumbers(text, where + " attribute '" + name + "'");
-  if (v.size() != 1) Fail(where + " attribute '" + name + "': expected one number");
-  const bool low_ok = lo_open ? v[0] > lo : v[0] >= lo;
-  if (!low_ok || v[0] > hi) {
-    std::ostringstream msg;
-    msg.imbue(std::locale::classic());
-    msg << where << " attribute '" << name << "' = " << v[0] << " is out of range " << (lo_open ? "(" : "[") << lo
-        << ", " << hi << "]";
-    Fail(msg.str());
-  }
-  return v[0];
-}
 
-Vec3 ReadVec3(const tinyxml2::XMLElement* e, const char* name, const std::string& where, const Vec3& fallback,
-              bool positive = false, bool required = false) {
-  const char* text = e ? e->Attribute(name) : nullptr;
-  if (!text && required) Fail(where + ": missing attribute '" + name + "'");
-  if (!text) return fallback;
-  const std::vector<double> v = ParseNumbers(text, where + " attribute '" + name + "'");
-  if (v.size() != 3) Fail(where + " attribute '" + name + "': expected three numbers");
-  const Vec3 out(v[0], v[1], v[2]);
-  if (positive && !(out.minCoeff() > 0.0)) Fail(where + " attribute '" + name + "': every value must be > 0");
-  return out;
-}
 
 Pose ReadOrigin(const tinyxml2::XMLElement* e, const std::string& where) {
   const Vec3 xyz = ReadVec3(e, "xyz", where, Vec3::Zero());
@@ -83,26 +39,7 @@ Pose ReadOrigin(const tinyxml2::XMLElement* e, const std::string& where) {
   return X;
 }
 
-Pose ToPose(const urdf::Pose& p) {
-  Pose X = Pose::Identity();
-  X.translation() = Vec3(p.position.x, p.position.y, p.position.z);
-  X.linear() = Eigen::Quaterniond(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z).toRotationMatrix();
-  return X;
-}
 
-// Refuses any attribute of `e` not in `allowed`: a misspelt or misplaced attribute would otherwise be ignored.
-void CheckAttributes(const tinyxml2::XMLElement* e, const std::vector<std::string>& allowed,
-                     const std::string& where) {
-  for (const tinyxml2::XMLAttribute* a = e->FirstAttribute(); a; a = a->Next()) {
-    bool known = false;
-    std::string list;
-    for (const std::string& name : allowed) {
-      known = known || a->Name() == name;
-      list += (list.empty() ? "" : ", ") + name;
-    }
-    if (!known) Fail(where + ": unknown attribute '" + a->Name() + "' (allowed: " + list + ")");
-  }
-}
 
 // One part of an <implicit type="intersection"> element.
 Inequality ReadPart(const tinyxml2::XMLElement* part, const std::string& where) {
@@ -206,19 +143,6 @@ ConvexShape ReadShape(const std::string& link, const urdf::Collision& collision,
 // model) and refuses a bad joint origin with a message that names no attribute. Checking its inputs first gives every
 // error the link and attribute, and no element is ever dropped silently.
 
-// `count` finite numbers (each > 0 when `positive`) in attribute `name` of `e`.
-void CheckNumbers(const tinyxml2::XMLElement* e, const char* name, const std::string& where, size_t count,
-                  bool positive) {
-  const char* text = e->Attribute(name);
-  if (!text) Fail(where + ": missing attribute '" + name + "'");
-  const std::vector<double> values = ParseNumbers(text, where + " attribute '" + name + "'");
-  if (values.size() != count) {
-    Fail(where + " attribute '" + name + "': expected " + std::to_string(count) + " number" + (count > 1 ? "s" : ""));
-  }
-  for (double v : values) {
-    if (positive && !(v > 0.0)) Fail(where + " attribute '" + name + "': every value must be > 0");
-  }
-}
 
 void CheckOrigin(const tinyxml2::XMLElement* parent, const std::string& where) {
   const tinyxml2::XMLElement* origin = parent->FirstChildElement("origin");
@@ -459,15 +383,10 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name)
   }
   const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
   if (!robot) Fail(scene + ": no <robot> element");
-  // Joint types first: urdfdom refuses a revolute joint without <limit> with a message that names nothing.
+  // Joints first: urdfdom refuses a revolute joint without <limit> with a message that names nothing.
   for (auto* j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
     const char* name = j->Attribute("name");
-    const char* type = j->Attribute("type");
-    const std::string type_text = type ? type : "";
-    if (type_text != "floating" && type_text != "fixed") {
-      Fail("joint '" + std::string(name ? name : "") + "': type '" + type_text +
-           "' is not supported (allowed: floating, fixed)");
-    }
+    CheckJointElement(j, "joint '" + std::string(name ? name : "") + "'");
   }
   CheckUrdfStructure(robot, scene_name);
   const urdf::ModelInterfaceSharedPtr urdf_model = ParseWithUrdfdom(xml, scene_name);
@@ -482,6 +401,7 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name)
     CheckAttributes(sim, {"gravity"}, "<implicit_sim>");
     model.gravity_W = ReadVec3(sim, "gravity", "<implicit_sim>", model.gravity_W);
   }
+  const JointStarts joint_starts = ReadJointStarts(sim, *urdf_model);
 
   std::vector<urdf::LinkSharedPtr> links;
   urdf_model->getLinks(links);
@@ -497,17 +417,14 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name)
       if (link->collision) Fail("link 'world': must have no <collision> (add a fixed link for static shapes)");
       continue;
     }
-    const urdf::JointSharedPtr joint = link->parent_joint;
-    if (!joint || joint->parent_link_name != "world") {
-      Fail("link '" + name + "': must be joined directly to 'world' (a floating or fixed joint)");
-    }
+    if (!link->parent_joint) Fail("link '" + name + "': no joint joins it to the tree under 'world'");
     if (link->collision_array.size() > 1) {
       Fail("link '" + name + "': one <collision> per link (a body is one convex shape)");
     }
     const tinyxml2::XMLElement* collision_xml = e->FirstChildElement("collision");
     Body body;
     body.name = name;
-    body.is_fixed = joint->type == urdf::Joint::FIXED;
+    body.is_fixed = IsWeldedToWorld(*link);
     const tinyxml2::XMLElement* implicit = collision_xml ? collision_xml->FirstChildElement("implicit") : nullptr;
     Pose X_LC = Pose::Identity();
     if (link->collision) {
@@ -518,9 +435,7 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name)
     if (!body.is_fixed) ReadInertia(*link, implicit, X_LC, &body, &X_LB);
     body.X_BL = X_LB.inverse();
     body.shape.X_BS = body.X_BL * X_LC;
-    const Pose X_WL0 = ToPose(joint->parent_to_joint_origin_transform);
-    if (!X_WL0.matrix().allFinite()) Fail("joint '" + joint->name + "': origin must be finite");
-    body.X_WB0 = X_WL0 * X_LB;
+    body.X_WB0 = InitialLinkPose(*link, joint_starts) * X_LB;
     model.bodies.push_back(body);
   }
   if (model.bodies.empty()) Fail("scene '" + scene_name + "': no link besides 'world'");
@@ -548,11 +463,12 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name)
         if (b < 0) Fail("<implicit_sim><body>: attribute 'link' must name a link of the scene");
         if (model.bodies[b].is_fixed) Fail("<implicit_sim><body link='" + std::string(link) + "'>: the link is fixed");
         ReadBodySettings(e, &model.bodies[b]);
-      } else {
-        Fail("<implicit_sim>: unknown element <" + tag + "> (allowed: friction, body)");
+      } else if (tag != "joint") {  // <joint>: ReadJointStarts
+        Fail("<implicit_sim>: unknown element <" + tag + "> (allowed: friction, body, joint)");
       }
     }
   }
+  BuildJoints(*urdf_model, joint_starts, &model);
   model.Finalize([&](int i, int j) {
     for (const auto& key : {std::make_pair(model.bodies[i].name, model.bodies[j].name),
                             std::make_pair(model.bodies[j].name, model.bodies[i].name)}) {

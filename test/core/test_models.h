@@ -4,6 +4,7 @@
 #include <string>
 
 #include "implicit_sim/core/model.h"
+#include "implicit_sim/core/urdf_loader.h"
 
 namespace implicit_sim {
 namespace test_models {
@@ -85,6 +86,54 @@ inline Model PrismOnGround(int sides) {
   m.bodies.back().locked = {{false, true, false, true, false, true}};
   return Finish(m);
 }
+
+// A robot with every joint type and feature: a base box on a limited revolute joint to the world (damping and
+// friction), a slider on a prismatic joint to it (limits, friction, damping), a finger welded to the slider (a 6-D
+// fixed joint between moving bodies), and a wheel on a continuous joint whose parent is a fixed post, above a
+// ground plane. Axes, origins and inertial frames are all off the principal directions.
+inline const char* kJointedRobotUrdf = R"(<?xml version="1.0"?>
+<robot name="jointed_robot">
+  <implicit_sim gravity="0.3 -0.2 -9.81">
+    <joint name="shoulder" position="0.3" velocity="-0.7"/>
+    <joint name="slide" position="0.05" velocity="0.2"/>
+    <joint name="axle" position="1.0" velocity="3.0"/>
+  </implicit_sim>
+  <link name="world"/>
+  <link name="ground"><collision><geometry><box size="1 1 1"/></geometry><implicit type="halfspace"/></collision></link>
+  <joint name="ground_joint" type="fixed"><parent link="world"/><child link="ground"/></joint>
+  <link name="base">
+    <inertial><origin xyz="0.05 0 0.02" rpy="0.1 0 0.2"/><mass value="2"/>
+      <inertia ixx="0.02" ixy="0.001" ixz="0" iyy="0.03" iyz="0" izz="0.04"/></inertial>
+    <collision><origin xyz="0.05 0 0"/><geometry><box size="0.3 0.1 0.1"/></geometry></collision>
+  </link>
+  <joint name="shoulder" type="revolute"><parent link="world"/><child link="base"/>
+    <origin xyz="0 0 1.0" rpy="0.2 0.1 0"/><axis xyz="0.1 1 0.2"/>
+    <limit lower="-0.5" upper="1.2" effort="50" velocity="5"/><dynamics damping="0.3" friction="0.4"/></joint>
+  <link name="slider">
+    <inertial><mass value="0.5"/><inertia ixx="0.002" ixy="0" ixz="0" iyy="0.002" iyz="0" izz="0.003"/></inertial>
+    <collision><geometry><sphere radius="0.04"/></geometry></collision>
+  </link>
+  <joint name="slide" type="prismatic"><parent link="base"/><child link="slider"/>
+    <origin xyz="0.2 0 0" rpy="0 0.3 0"/><axis xyz="1 0 0.1"/>
+    <limit lower="-0.1" upper="0.15" effort="20" velocity="1"/><dynamics damping="0.5" friction="0.2"/></joint>
+  <link name="finger">
+    <inertial><origin xyz="0 0 -0.05"/><mass value="0.2"/>
+      <inertia ixx="0.0005" ixy="0" ixz="0" iyy="0.0005" iyz="0" izz="0.0002"/></inertial>
+    <collision><origin xyz="0 0 -0.05"/><geometry><cylinder radius="0.02" length="0.1"/></geometry></collision>
+  </link>
+  <joint name="weld" type="fixed"><parent link="slider"/><child link="finger"/><origin xyz="0 0 -0.03" rpy="0.3 0 0"/></joint>
+  <link name="post"><collision><geometry><box size="0.05 0.05 0.5"/></geometry></collision></link>
+  <joint name="post_joint" type="fixed"><parent link="world"/><child link="post"/><origin xyz="1 1 0.25"/></joint>
+  <link name="wheel">
+    <inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.018"/></inertial>
+    <collision><geometry><cylinder radius="0.2" length="0.05"/></geometry></collision>
+  </link>
+  <joint name="axle" type="continuous"><parent link="post"/><child link="wheel"/>
+    <origin xyz="0 0.1 0.3" rpy="1.5707963 0 0"/><axis xyz="0 0 1"/><dynamics damping="0.1"/></joint>
+</robot>
+)";
+
+inline Model JointedRobot() { return LoadSceneFromString(kJointedRobotUrdf, "jointed_robot"); }
 
 }  // namespace test_models
 }  // namespace implicit_sim

@@ -63,7 +63,7 @@ void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, b
     }
   }
   EXPECT_LT(worst, 2e-6) << "worst mismatch at row " << worst_row << ", column " << worst_col
-                         << " (body velocities first, then pair blocks: a1 a2 n d s_t s_o s_r alpha beta ln sigma)";
+                         << " (body velocities first, then joint blocks, then pair blocks: a1 a2 n d s_t s_o s_r alpha beta ln sigma)";
 }
 
 TEST(StepProblemJacobian, EllipsoidOnGround) {
@@ -80,6 +80,11 @@ TEST(StepProblemJacobian, TwoMovingBodiesBoxAndSuperellipsoid) {
 
 TEST(StepProblemJacobian, PrismWithOffsetShapeFrameAndLockedAxes) {
   ExpectJacobianMatchesFiniteDifferences(test_models::PrismOnGround(7), 4);
+}
+
+TEST(StepProblemJacobian, JointsOfEveryTypeWithLimitsFrictionAndDamping) {
+  ExpectJacobianMatchesFiniteDifferences(test_models::JointedRobot(), 8);
+  ExpectJacobianMatchesFiniteDifferences(test_models::JointedRobot(), 9, true);
 }
 
 TEST(StepProblemJacobian, SparseAssemblyWithSeparatedFrictionRows) {

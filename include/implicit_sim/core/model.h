@@ -33,6 +33,39 @@ struct Body {
   std::array<bool, 6> locked{{false, false, false, false, false, false}};
 };
 
+// A URDF joint between two bodies: a bilateral constraint inside the step NCP (joints.h has the rows). The joint frame
+// J is the URDF joint frame: the child's link frame coincides with it at joint position 0.
+enum class JointType { kFixed, kRevolute, kContinuous, kPrismatic };
+const char* JointTypeName(JointType type);  // "fixed", "revolute", "continuous", "prismatic"
+
+struct Joint {
+  std::string name;
+  JointType type = JointType::kRevolute;
+  int parent = -1;             // body index of the parent link; -1: the world
+  int child = -1;              // body index of the child link (always a moving body)
+  Vec3 p_PJ = Vec3::Zero();    // joint origin in the parent's body frame (world frame for the world) (m)
+  Vec3 p_CJ = Vec3::Zero();    // joint origin in the child's body frame (m)
+  // Columns: the unit axis a, then b1 and b2 = a x b1 normal to it; R_PJ in the parent's body frame, R_CJ in the
+  // child's at joint position 0. For a limited revolute joint, b1 and b2 of R_PJ are turned about a by `offset`, so
+  // that the angle is measured from the middle of its range (any range shorter than 2 pi then works).
+  Mat3 R_PJ = Mat3::Identity();
+  Mat3 R_CJ = Mat3::Identity();
+  double offset = 0.0;         // rad, see R_PJ
+  bool limited = false;        // revolute and prismatic joints (URDF <limit lower upper>)
+  double lower = 0.0, upper = 0.0;  // rad (revolute) or m (prismatic)
+  double effort_limit = 0.0;   // commanded efforts are clamped to +-effort_limit (N m or N); 0: no clamp
+  double damping = 0.0;        // viscous, N m s/rad or N s/m (URDF <dynamics damping>)
+  double friction = 0.0;       // Coulomb, N m or N (URDF <dynamics friction>)
+  double initial_position = 0.0;  // rad or m
+  double initial_velocity = 0.0;  // rad/s or m/s
+
+  bool has_coordinate() const { return type != JointType::kFixed; }
+  int num_equalities() const { return type == JointType::kFixed ? 6 : 5; }
+  // Unknowns of the joint in the step NCP: one multiplier per equality, two limit multipliers when limited, and the
+  // friction fraction and slip speed when friction > 0.
+  int size() const { return num_equalities() + (limited ? 2 : 0) + (friction > 0.0 ? 2 : 0); }
+};
+
 // A candidate contact between body1 and body2 (indices into Model::bodies). body1 is always a moving body.
 struct ContactPair {
   int body1 = -1;
@@ -43,6 +76,7 @@ struct ContactPair {
 struct Model {
   std::vector<Body> bodies;
   std::vector<ContactPair> pairs;
+  std::vector<Joint> joints;       // parents before children
   std::vector<int> moving_bodies;  // indices of the moving bodies, in URDF order: velocity slot k -> body index
   std::vector<int> velocity_slot;  // body index -> velocity slot, -1 for fixed bodies
   // Pairs are listed by (lower body index i, higher index j), i ascending then j ascending; the pairs whose lower
@@ -53,10 +87,13 @@ struct Model {
 
   int num_moving() const { return static_cast<int>(moving_bodies.size()); }
   int FindBody(const std::string& name) const;  // -1 if absent
+  int FindJoint(const std::string& name) const;  // -1 if absent
+  bool Joined(int i, int j) const;  // whether a joint joins bodies i and j directly
   // The pair of bodies i and j (either order), -1 if they form none (both fixed, or one has no shape).
   int PairIndex(int i, int j) const;
   std::string PairName(int pair) const;  // "<link1>-<link2>", body1 first
-  // Builds moving_bodies, velocity_slot and one pair for every two bodies with shapes of which at least one moves.
+  // Builds moving_bodies, velocity_slot and one pair for every two bodies with shapes of which at least one moves and
+  // that no joint joins directly (adjacent links touch at their joint by design, as in MoveIt's default ACM).
   // `pair_friction(i, j)` gives the friction of the pair; bodies must already be filled in.
   template <typename FrictionOf>
   void Finalize(FrictionOf pair_friction);
@@ -82,6 +119,7 @@ void Model::Finalize(FrictionOf pair_friction) {
     for (int j = i + 1; j < static_cast<int>(bodies.size()); ++j) {
       if (bodies[i].is_fixed && bodies[j].is_fixed) continue;
       if (bodies[i].shape.inequalities.empty() || bodies[j].shape.inequalities.empty()) continue;
+      if (Joined(i, j)) continue;
       ContactPair pair;
       pair.body1 = bodies[i].is_fixed ? j : i;  // body1 moves
       pair.body2 = bodies[i].is_fixed ? i : j;

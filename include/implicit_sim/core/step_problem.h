@@ -3,6 +3,10 @@
 //
 // Unknowns z (everything at the END of the step):
 //   per moving body (slot k): nu_k = (v_WB, w_WB), 6 values, at z[6k].
+//   per model joint j, a block at joint_offset(j) (see AddJointRows in step_joints.cpp and joints.h):
+//     lambda (num_equalities)  multipliers of the joint equalities (N for linear rows, N m for angular rows)
+//     l_lo, l_hi              limit multipliers (N m or N), if the joint is limited
+//     s_f, sigma_f            friction as a fraction of the Coulomb limit, and the joint's slip speed, if friction > 0
 //   per contact pair c, a block at offset(c):
 //     a1 (3), a2 (3)     closest points on body 1 and body 2, world frame (m)
 //     n (3)              unit normal from body 2 towards body 1
@@ -30,11 +34,13 @@
 // geometric quantity depends on nu: that is what makes the step geometrically implicit.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
+#include "implicit_sim/core/joints.h"
 #include "implicit_sim/core/model.h"
 #include "implicit_sim/core/state.h"
 
@@ -85,6 +91,9 @@ class StepProblem {
   explicit StepProblem(const Model& model, bool all_pairs = true);
 
   int size() const { return size_; }
+  // Unknowns before the first pair block: the body velocities and the joint blocks.
+  int pair_base() const { return pair_base_; }
+  int joint_offset(int joint) const { return joint_offset_[joint]; }
   const std::vector<PairBlock>& blocks() const { return blocks_; }
   // Replaces the pairs in the problem by `pairs` (model pair indices, ascending). If z_old is given (laid out for
   // the previous pairs), *z_new receives its body part and the blocks of the pairs that stay, with their tangent axes;
@@ -119,6 +128,9 @@ class StepProblem {
   // separated contact).
   void SeedFriction(Eigen::VectorXd* z) const;
   void SeedFriction(int block, Eigen::VectorXd* z) const;
+  // Cold-start joint unknowns: zero multipliers; joint friction seeded from the start-of-step joint velocity like
+  // SeedFriction.
+  void SeedJoints(Eigen::VectorXd* z) const;
 
   // The FB-reformulated residual Phi(z) and, if J is not null, its exact generalized Jacobian (n x n), dense or sparse.
   void Evaluate(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J);
@@ -175,6 +187,16 @@ class StepProblem {
   void EvaluateAll(const Eigen::VectorXd& z, Eigen::VectorXd* Phi);
   void AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi);
   void AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi);
+  void AddJointRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi);
+  // Joint helpers (step_joints.cpp): the start-of-step gradients, the Jacobian of an end-of-step joint function, of a
+  // joint rate, and a generalized joint force on the body rows.
+  void BeginJoints();
+  void AddEndGradientRow(int row, const JointGradient& g, const BodyEnd& eP, const BodyEnd& eC,
+                         double scale);
+  void AddRateRow(int row, const JointGradient& g, const BodyEnd& eP, const BodyEnd& eC, double scale);
+  void AddJointForce(const JointGradient& g, double force, int col, double dforce_dcol, const BodyEnd& eP,
+                     const BodyEnd& eC, Eigen::VectorXd* Phi);
+  const BodyEnd& ParentEnd(const Joint& joint) const { return joint.parent < 0 ? world_end_ : end_[joint.parent]; }
   // Adds `block` to J at (row, col), dense or sparse (every call emits the same entries for the same layout, so that
   // the sparse pattern recorded once stays valid). Rows of locked velocities become "velocity = 0".
   template <typename Block>
@@ -193,6 +215,13 @@ class StepProblem {
   std::vector<BodyStep> start_;
   std::vector<BodyEnd> end_;
   std::vector<Vec3> tangent_axis_;   // per pair
+  std::vector<int> joint_offset_;    // per joint
+  int pair_base_ = 0;
+  // Per joint, at the start of the step: the gradients of the equalities and of the position. The joint forces act
+  // along them over the step while the equalities hold at its end (the SHAKE discretization; see AddJointRows).
+  std::vector<std::array<JointGradient, 6>> joint_equality_start_;
+  std::vector<JointGradient> joint_position_start_;
+  BodyEnd world_end_;                // the world as a parent: identity pose, no velocity unknowns
   Eigen::VectorXd external_wrench_W_;  // per moving body slot: force, torque (world, at the centre of mass)
   int size_ = 0;
   double h_ = 0.0;
