@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "implicit_sim/core/joints.h"
 #include "implicit_sim/core/support.h"
 
 namespace implicit_sim {
@@ -30,6 +31,8 @@ void RunSummary::Add(const StepReport& report, const Data& data) {
   max_iterations = std::max(max_iterations, report.iterations);
   max_residual = std::max(max_residual, report.residual);
   for (const ContactResult& contact : data.contacts) max_penetration = std::max(max_penetration, -contact.gap);
+  max_joint_position_error = std::max(max_joint_position_error, report.joint_position_error);
+  max_joint_angle_error = std::max(max_joint_angle_error, report.joint_angle_error);
 }
 
 std::string RunSummary::ToJson() const {
@@ -41,6 +44,8 @@ std::string RunSummary::ToJson() const {
   json += "  \"wall_s\": " + FormatNumber(wall_s) + ",\n";
   json += "  \"us_per_step\": " + FormatNumber(us_per_step) + ",\n";
   json += "  \"max_penetration\": " + FormatNumber(max_penetration) + ",\n";
+  json += "  \"max_joint_position_error\": " + FormatNumber(max_joint_position_error) + ",\n";
+  json += "  \"max_joint_angle_error\": " + FormatNumber(max_joint_angle_error) + ",\n";
   json += "  \"nonconverged_steps\": " + std::to_string(nonconverged_steps) + ",\n";
   json += "  \"cold_restarts\": " + std::to_string(cold_restarts) + ",\n";
   json += "  \"smoothed_solves\": " + std::to_string(smoothed_solves) + ",\n";
@@ -76,6 +81,10 @@ TrajectoryWriter::TrajectoryWriter(const std::string& path, const Model& model, 
       out_ << ',' << model.bodies[b].name << '.' << c;
     }
   }
+  for (const Joint& joint : model.joints) {
+    if (!joint.has_coordinate()) continue;
+    for (const char* c : {"q", "qd", "limit"}) out_ << ',' << joint.name << '.' << c;
+  }
   for (int pair = 0; pair_columns_ && pair < static_cast<int>(model.pairs.size()); ++pair) {
     for (const char* c : {"gap", "fn", "ft", "mr", "slip"}) out_ << ',' << model.PairName(pair) << '.' << c;
   }
@@ -98,8 +107,18 @@ void TrajectoryWriter::WriteEnergies(const State& state) {
   out_ << ',' << FormatNumber(KineticEnergy(model_, state)) << ',' << FormatNumber(potential) << '\n';
 }
 
+// Position, velocity and limit effort of every joint with a coordinate (limit effort nan: not yet computed).
+void TrajectoryWriter::WriteJoints(const State& state, const Data* data) {
+  for (int j = 0; j < static_cast<int>(model_.joints.size()); ++j) {
+    if (!model_.joints[j].has_coordinate()) continue;
+    out_ << ',' << FormatNumber(JointPosition(model_, state, j)) << ',' << FormatNumber(JointVelocity(model_, state, j))
+         << ',' << FormatNumber(data ? data->problem.JointLimitEffort(data->z, j) : std::nan(""));
+  }
+}
+
 void TrajectoryWriter::WriteInitial(const State& state) {
   WriteBodies(state);
+  WriteJoints(state, nullptr);
   for (size_t c = 0; pair_columns_ && c < model_.pairs.size(); ++c) {
     const ContactPair& pair = model_.pairs[c];
     const ClosestPointsResult cp =
@@ -113,6 +132,7 @@ void TrajectoryWriter::WriteInitial(const State& state) {
 
 void TrajectoryWriter::WriteStep(const State& state, const Data& data, const StepReport& report) {
   WriteBodies(state);
+  WriteJoints(state, &data);
   for (const ContactResult& c : data.contacts) {
     std::ostream& out = pair_columns_ ? out_ : contacts_;
     if (!pair_columns_) {

@@ -7,7 +7,8 @@
 //   the next two rows   Coulomb joint friction like the contact friction of step_problem.h: qdot + s_f sigma_f = 0
 //                       and FB(sigma_f, 1 - s_f^2), friction force F_c s_f
 // and on the body rows the generalized joint force G^T f / Fs with
-//   f = sum_i lambda_i G_i + (l_lo - l_hi + F_c s_f - c qdot + 0) G_q,   qdot = G_q . nu (implicit damping c)
+//   f = sum_i lambda_i G_i + (l_lo - l_hi + F_c s_f - c qdot + tau) G_q,   qdot = G_q . nu (implicit damping c),
+//   tau the scene's constant joint effort
 // where G_i and G_q are the gradients of the equalities and of the position at the START of the step. Forces along the
 // start-of-step gradients with constraints at the end is the SHAKE discretization: with the position update
 // p1 = p0 + h v1 it is the symplectic Euler method for a constrained system, so a pendulum's energy oscillates about
@@ -48,6 +49,13 @@ void StepProblem::BeginJoints() {
     for (int i = 0; i < joint.num_equalities(); ++i) JointEquality(joint, i, X_WP, X_WC, &joint_equality_start_[j][i]);
     JointPosition(joint, X_WP, X_WC, &joint_position_start_[j]);
   }
+}
+
+double StepProblem::JointLimitEffort(const Eigen::VectorXd& z, int j) const {
+  const Joint& joint = model_.joints[j];
+  if (!joint.limited) return 0.0;
+  const int col = joint_offset_[j] + joint.num_equalities();
+  return z[col] - z[col + 1];
 }
 
 void StepProblem::SeedJoints(Eigen::VectorXd* z) const {
@@ -128,6 +136,7 @@ void StepProblem::AddJointRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
     }
     if (!joint.has_coordinate()) continue;
     const JointGradient& G_q = joint_position_start_[j];
+    if (joint.applied_effort != 0.0) AddJointForce(G_q, joint.applied_effort, -1, 0.0, eP, eC, Phi);
     int col = o + m;
     if (joint.limited) {  // 0 <= l_lo _|_ q - lower >= 0 and 0 <= l_hi _|_ upper - q >= 0
       const double q = JointPosition(joint, X_WP, X_WC, &g);

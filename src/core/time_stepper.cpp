@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "implicit_sim/core/ipopt_ncp.h"
+#include "implicit_sim/core/joints.h"
 #include "implicit_sim/core/run_output.h"
 #include "implicit_sim/core/step_health.h"
 #include "implicit_sim/core/support.h"
@@ -416,6 +417,7 @@ StepReport Step(const Model& model, const StepperOptions& options, State* state,
   for (const ContactResult& contact : data->contacts) {
     if (contact.normal_force > options.contact_threshold) ++report.active_contacts;
   }
+  JointDrift(model, *state, &report.joint_position_error, &report.joint_angle_error);
   report.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return report;
 }

@@ -88,7 +88,7 @@ JointStarts ReadJointStarts(const tinyxml2::XMLElement* sim, const urdf::ModelIn
   for (auto* e = sim ? sim->FirstChildElement("joint") : nullptr; e; e = e->NextSiblingElement("joint")) {
     const char* name = e->Attribute("name");
     const std::string where = "<implicit_sim><joint name='" + std::string(name ? name : "") + "'>";
-    CheckAttributes(e, {"name", "position", "velocity"}, where);
+    CheckAttributes(e, {"name", "position", "velocity", "effort"}, where);
     const urdf::JointConstSharedPtr joint = name ? urdf.getJoint(name) : nullptr;
     if (!joint) Fail(where + ": attribute 'name' must name a joint of the scene");
     if (!HasCoordinate(*joint)) Fail(where + ": the joint must be revolute, continuous or prismatic");
@@ -98,6 +98,8 @@ JointStarts ReadJointStarts(const tinyxml2::XMLElement* sim, const urdf::ModelIn
     JointStart start;
     start.position = ReadScalar(e, "position", where, lower, upper, false, 0.0, false);
     start.velocity = ReadScalar(e, "velocity", where, -1e5, 1e5, false, 0.0, false);
+    const double effort_limit = joint->limits && joint->limits->effort > 0.0 ? joint->limits->effort : 1e9;
+    start.effort = ReadScalar(e, "effort", where, -effort_limit, effort_limit, false, 0.0, false);
     starts[name] = start;
   }
   return starts;
@@ -157,6 +159,7 @@ void ReadJointParameters(const urdf::Joint& u, const JointStarts& starts, Joint*
   if (start != starts.end()) {
     joint->initial_position = start->second.position;
     joint->initial_velocity = start->second.velocity;
+    joint->applied_effort = start->second.effort;
   }
 }
 

@@ -17,10 +17,12 @@ namespace loader {
 // urdfdom never refuses one with a message that names nothing.
 void CheckJointElement(const tinyxml2::XMLElement* joint, const std::string& where);
 
-// Initial joint position (rad or m) and velocity (rad/s or m/s) from <implicit_sim><joint name position velocity/>.
+// Initial joint position (rad or m) and velocity (rad/s or m/s) and a constant effort, from
+// <implicit_sim><joint name position velocity effort/>.
 struct JointStart {
   double position = 0.0;
   double velocity = 0.0;
+  double effort = 0.0;  // constant applied effort, N m or N
 };
 using JointStarts = std::map<std::string, JointStart>;
 JointStarts ReadJointStarts(const tinyxml2::XMLElement* sim, const urdf::ModelInterface& urdf);

@@ -28,10 +28,11 @@ struct RunStats {
 
 using StepCallback = std::function<void(const Model&, const State&, const Data&, const StepReport&)>;
 
-inline RunStats RunScene(const Model& model, double h, double duration, const StepCallback& on_step = nullptr) {
+inline RunStats RunScene(const Model& model, double h, double duration, const StepCallback& on_step = nullptr,
+                         Data::PairSelection selection = Data::PairSelection::kAuto) {
   StepperOptions options;
   options.h = h;
-  Data data(model);
+  Data data(model, selection);
   State state = State::Initial(model);
   RunStats stats;
   stats.ke0 = KineticEnergy(model, state);

@@ -51,7 +51,8 @@ Model BoxStack() {
 
 TEST(Allocation, AThousandWarmStepsAllocateNothing) {
   std::vector<std::pair<std::string, Model>> scenes;
-  for (const char* scene : {"p3_sphere_on_two_spheres.urdf", "p1_ngon20.urdf", "p2_sphere_spinning.urdf"}) {
+  for (const char* scene : {"p3_sphere_on_two_spheres.urdf", "p1_ngon20.urdf", "p2_sphere_spinning.urdf",
+                            "gripper_lift.urdf"}) {
     scenes.emplace_back(scene, LoadSceneFromFile(testing_support::ScenePath(scene)));
   }
   scenes.emplace_back("stack of three boxes", BoxStack());

@@ -90,7 +90,7 @@ inline Model PrismOnGround(int sides) {
 // A robot with every joint type and feature: a base box on a limited revolute joint to the world (damping and
 // friction), a slider on a prismatic joint to it (limits, friction, damping), a finger welded to the slider (a 6-D
 // fixed joint between moving bodies), and a wheel on a continuous joint whose parent is a fixed post, above a
-// ground plane. Axes, origins and inertial frames are all off the principal directions.
+// ground plane that the swinging arm hits. Axes, origins and inertial frames are all off the principal directions.
 inline const char* kJointedRobotUrdf = R"(<?xml version="1.0"?>
 <robot name="jointed_robot">
   <implicit_sim gravity="0.3 -0.2 -9.81">
@@ -107,7 +107,7 @@ inline const char* kJointedRobotUrdf = R"(<?xml version="1.0"?>
     <collision><origin xyz="0.05 0 0"/><geometry><box size="0.3 0.1 0.1"/></geometry></collision>
   </link>
   <joint name="shoulder" type="revolute"><parent link="world"/><child link="base"/>
-    <origin xyz="0 0 1.0" rpy="0.2 0.1 0"/><axis xyz="0.1 1 0.2"/>
+    <origin xyz="0 0 0.3" rpy="0.2 0.1 0"/><axis xyz="0.1 1 0.2"/>
     <limit lower="-0.5" upper="1.2" effort="50" velocity="5"/><dynamics damping="0.3" friction="0.4"/></joint>
   <link name="slider">
     <inertial><mass value="0.5"/><inertia ixx="0.002" ixy="0" ixz="0" iyy="0.002" iyz="0" izz="0.003"/></inertial>

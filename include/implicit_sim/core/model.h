@@ -58,6 +58,7 @@ struct Joint {
   double friction = 0.0;       // Coulomb, N m or N (URDF <dynamics friction>)
   double initial_position = 0.0;  // rad or m
   double initial_velocity = 0.0;  // rad/s or m/s
+  double applied_effort = 0.0;    // constant effort (N m or N), within +-effort_limit when that is > 0
 
   bool has_coordinate() const { return type != JointType::kFixed; }
   int num_equalities() const { return type == JointType::kFixed ? 6 : 5; }

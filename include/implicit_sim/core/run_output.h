@@ -1,6 +1,7 @@
 // Headless outputs of a run: the trajectory CSV (one row per step, t = 0 included) and the summary JSON.
 // Column names are a contract (README.md): t; per moving body B: B.x B.y B.z B.qw B.qx B.qy B.qz B.vx B.vy B.vz
-// B.wx B.wy B.wz; per pair P = <link1>-<link2>: P.gap P.fn P.ft P.mr P.slip (only when every pair is in every NCP, see
+// B.wx B.wy B.wz; per joint J with a coordinate (not fixed): J.q J.qd J.limit (position rad or m, velocity, limit
+// effort N m or N); per pair P = <link1>-<link2>: P.gap P.fn P.ft P.mr P.slip (only when every pair is in every NCP, see
 // Data::PairSelection); step.iterations step.residual step.converged; energy.kinetic energy.potential (J; potential
 // -sum m g . p, zero at the world origin). With the broad phase the contacts go to
 // contacts.csv instead, one row per touching pair per step: t,pair,gap,fn,ft,mr,slip. Numbers are written
@@ -37,6 +38,8 @@ struct RunSummary {
   double max_residual = 0.0;
   double kinetic_energy_initial = 0.0; // J
   double kinetic_energy_final = 0.0;   // J
+  double max_joint_position_error = 0.0;  // over steps, StepReport::joint_position_error (m)
+  double max_joint_angle_error = 0.0;     // StepReport::joint_angle_error (rad)
   // The friction parameters of the pairs with trajectory columns ("pairs" in the JSON; empty: the key is left out).
   std::vector<std::pair<std::string, FrictionParams>> pairs;
   void Add(const StepReport& report, const Data& data);
@@ -54,6 +57,7 @@ class TrajectoryWriter {
 
  private:
   void WriteBodies(const State& state);
+  void WriteJoints(const State& state, const Data* data);
   void WriteEnergies(const State& state);  // the two energy columns and the end of the row
   const Model& model_;
   bool pair_columns_;

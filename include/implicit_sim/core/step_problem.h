@@ -149,6 +149,10 @@ class StepProblem {
   // The contact quantities of every pair in the problem for a solution z (one entry per block, in block order).
   void Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>* out);
 
+  // The joint limit effort l_lo - l_hi of joint j in a solution z (N m or N, positive towards increasing position; 0
+  // for a joint without limits): the step-average effort the limit exerted.
+  double JointLimitEffort(const Eigen::VectorXd& z, int joint) const;
+
   // End-of-step pose of body b for velocities in z.
   Pose EndPose(int body, const Eigen::VectorXd& z) const;
 

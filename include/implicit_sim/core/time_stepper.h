@@ -63,6 +63,8 @@ struct StepReport {
   double residual = 0.0;        // |Phi|_2 of the accepted solution (the largest over sub-steps)
   double complementarity_error = 0.0;
   int active_contacts = 0;      // pairs with normal force > contact_threshold
+  double joint_position_error = 0.0;  // the largest violation of a joint's linear equalities at the step end (m)
+  double joint_angle_error = 0.0;     // and of its angular equalities (rad); see joints.h
   double wall_time_s = 0.0;
   StepFault fault = StepFault::kNone;
   std::string fault_detail;     // which pair overlaps or which body diverged, with the numbers (empty without fault)
