@@ -1,5 +1,8 @@
 // rostest for implicit_sim_node on the P3 scene (test/ros/sim_node_p3.test starts it paused, as fast as possible).
 // The tests share one node; each one that needs the initial state calls ~reset first.
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -7,6 +10,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -470,6 +474,85 @@ TEST(SimNode, SigintAndSigtermShutDownCleanlyWithinTwoSeconds) {
     EXPECT_EQ(exit_code, 0) << out;
     EXPECT_LT(ms, 2000) << out;
   }
+}
+
+// A loopback TCP port that is free now, for a master of a second roslaunch's own.
+int FreePort() {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t length = sizeof(address);
+  const bool ok = fd >= 0 && bind(fd, reinterpret_cast<sockaddr*>(&address), length) == 0 &&
+                  getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length) == 0;
+  if (fd >= 0) close(fd);
+  return ok ? ntohs(address.sin_port) : -1;
+}
+
+bool FileExists(const std::string& path) {
+  struct stat info;
+  return stat(path.c_str(), &info) == 0;
+}
+
+// The message count of `topic` in `rosbag info` output (its line "<topic>   N msgs : type"), or -1.
+long BagMessages(const std::string& info, const std::string& topic) {
+  std::istringstream lines(info);
+  for (std::string line; std::getline(lines, line);) {
+    std::istringstream words(line);
+    std::string word;
+    words >> word;
+    if (word == "topics:") words >> word;
+    long count = -1;
+    if (word == topic && words >> count) return count;
+  }
+  return -1;
+}
+
+// SIGINT and SIGTERM to `roslaunch implicit_sim p3_sphere_on_two_spheres.launch record:=true` (with a master of its
+// own: the launch sets /use_sim_time and names its node /implicit_sim) stop it with exit code 0 and leave the bag
+// closed: `<bag>` exists, `<bag>.active` does not, and `rosbag info` reads messages on every recorded topic. The
+// signal reaches roslaunch only (each node runs in a session of its own), as it would from a supervisor; roslaunch
+// then sends SIGINT to the recorder and the node, waits for them (it would escalate to SIGTERM after 15 s), stops
+// its master and exits; the recorder renames `<bag>.active` to `<bag>` when it closes the bag on that SIGINT. A
+// recorder that dies otherwise (SIGKILL, or a roslaunch killed before its shutdown, which orphans it) leaves
+// `<bag>.active`. roslaunch's exit takes about 1.8 s here (its own, rosout's and the master's shutdown), so it is
+// printed, not bounded; the 2 s bound is the node's (SigintAndSigtermShutDownCleanlyWithinTwoSeconds).
+TEST(SimNode, SigintAndSigtermToRoslaunchLeaveTheRecordedBagClosed) {
+  const int port = FreePort();
+  ASSERT_GT(port, 0);
+  char dir_template[] = "/tmp/implicit_sim_launch_bag_XXXXXX";  // not shared with a concurrent run
+  ASSERT_NE(mkdtemp(dir_template), nullptr);
+  const std::string dir = dir_template;
+  int code = 0;
+  for (const char* signal : {"INT", "TERM"}) {
+    SCOPED_TRACE(signal);
+    const std::string bag = dir + "/" + signal + ".bag";
+    const std::string out = RunCommand(
+        // Line-buffered node output: block-buffered, "Recording to" would reach the log only at exit.
+        "ROSCONSOLE_STDOUT_LINE_BUFFERED=1 ROS_MASTER_URI=http://localhost:" + std::to_string(port) + " " +
+            SignalShutdown() + "--settle=3 " + signal +
+            " 'Recording to' roslaunch implicit_sim p3_sphere_on_two_spheres.launch record:=true bag:=" + bag,
+        &code);
+    int exit_code = -1, ms = -1;
+    ASSERT_NE(out.rfind("exit="), std::string::npos) << out;
+    ASSERT_EQ(std::sscanf(out.substr(out.rfind("exit=")).c_str(), "exit=%d ms=%d", &exit_code, &ms), 2) << out;
+    EXPECT_EQ(exit_code, 0) << out;
+    EXPECT_NE(out.find("Recording to"), std::string::npos) << out;
+    EXPECT_EQ(out.find("escalating"), std::string::npos) << out;  // every node stopped on roslaunch's first SIGINT
+    EXPECT_TRUE(FileExists(bag)) << out;
+    EXPECT_FALSE(FileExists(bag + ".active")) << out;
+    const std::string info = RunCommand("rosbag info " + bag, &code);
+    EXPECT_EQ(code, 0) << info;
+    std::string counts;
+    for (const std::string topic : {"/clock", "/tf", "/tf_static", "/implicit_sim/contacts", "/implicit_sim/markers",
+                                    "/implicit_sim/body_states", "/implicit_sim/step_stats"}) {
+      const long messages = BagMessages(info, topic);
+      EXPECT_GT(messages, 0) << topic << " in\n" << info;
+      counts += " " + topic + " " + std::to_string(messages);
+    }
+    std::printf("[ INFO ] SIG%s to roslaunch: exit %d after %d ms; bag:%s\n", signal, exit_code, ms, counts.c_str());
+  }
+  if (!HasFailure()) RunCommand("rm -rf " + dir, &code);
 }
 
 // 50 subscribe / unsubscribe cycles on every topic, plus one subscriber whose queue is never spun, while the
