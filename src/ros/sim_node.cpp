@@ -89,6 +89,7 @@ NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
   p.world_frame = ReadParam(pnh, "world_frame", p.world_frame);
   p.force_marker_scale = ReadParam(pnh, "force_marker_scale", p.force_marker_scale);
   p.contact_marker_size = ReadParam(pnh, "contact_marker_size", p.contact_marker_size);
+  p.publish_joint_link_tf = ReadParam(pnh, "publish_joint_link_tf", p.publish_joint_link_tf);
   CheckRange("time_step", p.time_step, 0.0, 1.0, true, "s");
   CheckRange("tolerance", p.tolerance, 0.0, 0.1, true, "");
   CheckRange("max_iterations", p.max_iterations, 1, 100000, false, "");
@@ -117,6 +118,7 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   paused_ = params_.paused;
   commanded_W_ = Eigen::VectorXd::Zero(6 * model_.num_moving());
   wrench_W_ = Eigen::VectorXd::Zero(6 * model_.num_moving());
+  joint_efforts_ = Eigen::VectorXd::Zero(model_.joints.size());
 
   clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
   contacts_pub_ = pnh_.advertise<implicit_sim::Contacts>("contacts", 10);
@@ -132,6 +134,9 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   services_.push_back(pnh_.advertiseService("set_body_state", &SimNode::OnSetBodyState, this));
   services_.push_back(pnh_.advertiseService("apply_body_wrench", &SimNode::OnApplyWrench, this));
   wrench_sub_ = pnh_.subscribe("wrench_cmd", 100, &SimNode::OnWrenchCommand, this);
+  services_.push_back(pnh_.advertiseService("set_joint_efforts", &SimNode::OnSetJointEfforts, this));
+  joint_effort_sub_ = pnh_.subscribe("joint_effort_cmd", 100, &SimNode::OnJointEffortCommand, this);
+  joint_states_pub_ = nh_.advertise<sensor_msgs::JointState>("joint_states", 10);
 
   std::vector<geometry_msgs::TransformStamped> statics;
   for (const Body& body : model_.bodies) {
@@ -194,6 +199,7 @@ void SimNode::ComputeWrenchesLocked() {
     wrench_W_.segment<3>(6 * k) += f_W;
     wrench_W_.segment<3>(6 * k + 3) += X_WF.linear() * w.torque + arm.cross(f_W);
   }
+  if (!model_.joints.empty()) AddJointEffortWrench(model_, state_, joint_efforts_, &wrench_W_);
 }
 
 void SimNode::StepLocked() {
@@ -235,6 +241,7 @@ void SimNode::ResetLocked() {
   data_.contacts.clear();
   wrenches_.clear();
   commanded_W_.setZero();
+  joint_efforts_.setZero();
   restart_pacing_ = true;
   at_initial_state_ = true;
 }
@@ -309,6 +316,9 @@ void SimNode::PublishLoop() {
   const visualization_msgs::MarkerArray shapes = conv::ShapeMarkers(model_);
   State snapshot = State::Initial(model_);
   std::vector<ContactResult> contacts;
+  Eigen::VectorXd efforts;
+  std::vector<char> on_tf(model_.bodies.size(), 1);  // jointed links leave /tf to robot_state_publisher if asked
+  for (const Joint& joint : model_.joints) on_tf[joint.child] = params_.publish_joint_link_tf;
   std::vector<int> shown_pairs, active_pairs;  // pairs with contact markers: last published, current
   ros::WallRate rate(params_.publish_rate);
   WallClock::time_point last_diagnostics = WallClock::now(), last_tf_wall;
@@ -320,6 +330,7 @@ void SimNode::PublishLoop() {
       if (shutdown_) return;
       snapshot = state_;
       contacts = data_.contacts;
+      efforts = joint_efforts_;
       sim = SimTime();
     }
     const ros::Time stamp = ros::Time().fromSec(sim);
@@ -333,6 +344,7 @@ void SimNode::PublishLoop() {
     }
     std::vector<geometry_msgs::TransformStamped> transforms;
     for (int b : model_.moving_bodies) {
+      if (!on_tf[b]) continue;
       geometry_msgs::TransformStamped t;
       t.header.stamp = stamp;
       t.header.frame_id = params_.world_frame;
@@ -340,7 +352,8 @@ void SimNode::PublishLoop() {
       t.transform = conv::ToTransformMsg(conv::LinkPose(model_, snapshot, b));
       transforms.push_back(t);
     }
-    if (moved) tf_broadcaster_.sendTransform(transforms);  // one batched /tf message
+    if (moved && !transforms.empty()) tf_broadcaster_.sendTransform(transforms);  // one batched /tf message
+    PublishJointStates(snapshot, efforts, stamp);
     if (body_states_pub_.getNumSubscribers() > 0) {
       implicit_sim::BodyStates msg;
       msg.header.stamp = stamp;
@@ -406,6 +419,8 @@ void SimNode::UpdateDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& sta
   status.add("failed_steps_since_last_report", diag_failed_);
   status.add("received_wrench_commands", received_commands_);
   status.add("dropped_wrench_commands", dropped_commands_);
+  status.add("received_joint_effort_commands", received_joint_commands_);
+  status.add("dropped_joint_effort_commands", dropped_joint_commands_);
   for (StepFault fault : {StepFault::kNotConverged, StepFault::kNoFiniteSolution, StepFault::kInitialOverlap,
                           StepFault::kDiverged}) {
     status.add(std::string("faults_") + StepFaultName(fault), faults_[static_cast<int>(fault)]);

@@ -10,6 +10,8 @@
 #include <vector>
 
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <Eigen/Core>
+#include <sensor_msgs/JointState.h>
 #include <ros/ros.h>
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/static_transform_broadcaster.h>
@@ -19,6 +21,7 @@
 #include "implicit_sim/BodyWrench.h"
 #include "implicit_sim/GetBodyState.h"
 #include "implicit_sim/SetBodyState.h"
+#include "implicit_sim/SetJointEfforts.h"
 #include "implicit_sim/Step.h"
 #include "implicit_sim/core/model.h"
 #include "implicit_sim/core/time_stepper.h"
@@ -43,6 +46,9 @@ struct NodeParams {
   std::string world_frame = "world";
   double force_marker_scale = 0.05;  // m/N, (0, 100]: length of a contact force arrow per newton
   double contact_marker_size = 0.05;  // m, (0, 100]: diameter of a contact point (arrows scale with it)
+  // Whether /tf carries the links that hang on joints (world -> link, like every other body). Set false to leave them
+  // to robot_state_publisher fed by /joint_states (it publishes parent -> child along the URDF tree).
+  bool publish_joint_link_tf = true;
   // Reads and validates; throws std::invalid_argument naming the parameter and its range.
   static NodeParams Read(const ros::NodeHandle& pnh);
 };
@@ -83,6 +89,12 @@ class SimNode {
   bool OnSetBodyState(implicit_sim::SetBodyState::Request& req, implicit_sim::SetBodyState::Response& res);
   bool OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req, implicit_sim::ApplyBodyWrench::Response& res);
   void OnWrenchCommand(const implicit_sim::BodyWrench::ConstPtr& msg);
+  // Joints (sim_node_joints.cpp): ~joint_effort_cmd, ~set_joint_efforts and /joint_states.
+  bool SetJointEffortsLocked(const std::vector<std::string>& names, const std::vector<double>& efforts,
+                             std::string* error);  // all or nothing
+  void OnJointEffortCommand(const sensor_msgs::JointState::ConstPtr& msg);
+  bool OnSetJointEfforts(implicit_sim::SetJointEfforts::Request& req, implicit_sim::SetJointEfforts::Response& res);
+  void PublishJointStates(const State& snapshot, const Eigen::VectorXd& efforts, const ros::Time& stamp);
 
   ros::NodeHandle nh_, pnh_;
   NodeParams params_;
@@ -101,6 +113,8 @@ class SimNode {
   std::vector<TimedWrench> wrenches_;
   Eigen::VectorXd commanded_W_;   // ~wrench_cmd, per moving slot: force, torque at the link origin (world)
   Eigen::VectorXd wrench_W_;      // the wrench vector handed to the core (at the centre of mass)
+  Eigen::VectorXd joint_efforts_;  // per model joint: the commanded effort (N m or N; fixed joints 0)
+  long received_joint_commands_ = 0, dropped_joint_commands_ = 0;
   long diag_steps_ = 0, diag_nonconverged_ = 0, diag_failed_ = 0, dropped_commands_ = 0, received_commands_ = 0;
   long faults_[5] = {0, 0, 0, 0, 0};  // refused or non-converged steps since startup, by StepFault
   bool at_initial_state_ = true;      // no step taken since startup or the last reset
@@ -110,9 +124,9 @@ class SimNode {
   std::mutex clock_mutex_;
   double last_clock_ = -1.0;
 
-  ros::Publisher clock_pub_, contacts_pub_, markers_pub_, stats_pub_, body_states_pub_;
+  ros::Publisher clock_pub_, contacts_pub_, markers_pub_, stats_pub_, body_states_pub_, joint_states_pub_;
   std::vector<ros::ServiceServer> services_;
-  ros::Subscriber wrench_sub_;
+  ros::Subscriber wrench_sub_, joint_effort_sub_;
   tf2_ros::TransformBroadcaster tf_broadcaster_;
   tf2_ros::StaticTransformBroadcaster static_broadcaster_;
   diagnostic_updater::Updater diagnostics_;
