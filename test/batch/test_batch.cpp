@@ -196,8 +196,8 @@ TEST(BatchStudy, TheCubesSixFacesEachGetAShareWithinBinomialBoundsOfOneSixth) {
   for (size_t i = 0; i < forty.size(); ++i) EXPECT_EQ(lines[i], forty[i]);
 
   const auto [lo, hi] = BinomialInterval(240, 1.0 / 6.0);
-  EXPECT_GT(lo, 20);
-  EXPECT_LT(hi, 60);
+  EXPECT_EQ(lo, 22);  // 40 +- 18
+  EXPECT_EQ(hi, 60);
   double chi2 = 0.0;
   std::ostringstream shares;
   for (const char* face : {"+x", "-x", "+y", "-y", "+z", "-z"}) {
