@@ -296,7 +296,7 @@ TEST(BatchStudy, BadSweepsAndArgumentsAreRefusedNamingTheKey) {
       {"bad_energy", "kinetic_energy: 1.0e-5", "kinetic_energy: 0", {"stop.at_rest.kinetic_energy", "J"}},
       {"bad_dt", "dt: 0.005", "dt: 2", {"dt", "(0, 1]"}},
       {"bad_classifier", "classifier: box_faces", "classifier: corners", {"classifier", "box_faces"}},
-      {"no_scene", "/cube_drop.urdf", "/nothing.urdf", {"scene", "no such file"}},
+      {"no_scene", "/scenes/cube_drop.urdf ", "/scenes/nothing.urdf ", {"scene", "no such file"}},
       {"bad_body", "body: cube", "body: ground", {"body", "floating"}},
   };
   for (const Case& c : cases) {
@@ -306,7 +306,8 @@ TEST(BatchStudy, BadSweepsAndArgumentsAreRefusedNamingTheKey) {
     text.replace(at, c.from.size(), c.to);
     const std::string sweep = dir + "/" + c.name + ".yaml";
     std::ofstream(sweep) << text;
-    const int status = Batch(sweep + " --out " + dir + "/" + c.name, dir + "/" + c.name);
+    // --samples 2: a sweep refused by mistake would not run long.
+    const int status = Batch(sweep + " --out " + dir + "/" + c.name + " --samples 2", dir + "/" + c.name);
     const std::string err = Read(dir + "/" + c.name + ".err");
     EXPECT_EQ(status, 2) << c.name << ": " << err;
     EXPECT_EQ(Lines(err).size(), 1u) << c.name << ": " << err;
