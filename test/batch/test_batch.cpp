@@ -58,8 +58,8 @@ std::string TempDir(const std::string& name) {
 }
 
 // Runs implicit_sim_batch with `args` (the runner given explicitly); stdout and stderr go to DIR.log files.
-int Batch(const std::string& args, const std::string& log) {
-  return Shell(kBatch + " " + args + " --runner " + kRunner + " > " + log + ".out 2> " + log + ".err");
+int Batch(const std::string& args, const std::string& log, const std::string& env = "") {
+  return Shell(env + " " + kBatch + " " + args + " --runner " + kRunner + " > " + log + ".out 2> " + log + ".err");
 }
 
 std::string Field(const std::string& line, const std::string& key) {
@@ -245,6 +245,32 @@ TEST(BatchStudy, TheSlurmScriptPassesADryCheckAndEachArrayIndexRunsItsSample) {
   EXPECT_EQ(Batch(kCubeSweep + " --out " + out + " --samples 40 --merge-only --no-report", out + "_merge"), 1);
   EXPECT_EQ(Read(out + "/results.jsonl"), reference[0] + "\n" + reference[17] + "\n" + reference[39] + "\n");
   EXPECT_NE(Read(out + "_merge.err").find("37 samples have no line yet"), std::string::npos) << Read(out + "_merge.err");
+}
+
+// --sshlogin: GNU parallel sends the samples to the hosts of the login list over ssh. PARALLEL_SSH points GNU
+// parallel at a stand-in for ssh that logs the host and runs the remote command here, so both "hosts" get samples
+// through the same quoting and transport path a real ssh takes.
+TEST(BatchStudy, AnSshLoginListSpreadsTheSamplesOverTheHosts) {
+  const std::vector<std::string> reference = Lines(FortySampleRun());
+  ASSERT_EQ(reference.size(), 40u);
+  const std::string out = TempDir("ssh");
+  const std::string fake_ssh = out + ".ssh", log = out + ".ssh.log";
+  std::ofstream(fake_ssh) << "#!/bin/bash\n"
+                             "echo \"$1\" >> " << log << "\n"
+                             "while [ $# -gt 0 ]; do case \"$1\" in --) shift; break;; -*) shift;; *) shift; break;; esac; done\n"
+                             "[ \"${1:-}\" = -- ] && shift\n"
+                             "exec bash -c \"$*\"\n";
+  ASSERT_EQ(Shell("chmod +x " + fake_ssh), 0);
+  ASSERT_EQ(Batch(kCubeSweep + " --out " + out + " --samples 6 --sshlogin 1/hostA,1/hostB", out,
+                  "PARALLEL_SSH=" + fake_ssh),
+            0)
+      << Read(out + ".err");
+  const std::vector<std::string> lines = Lines(Read(out + "/results.jsonl"));
+  ASSERT_EQ(lines.size(), 6u);
+  for (size_t i = 0; i < lines.size(); ++i) EXPECT_EQ(lines[i], reference[i]);
+  const std::string hosts = Read(log);
+  EXPECT_NE(hosts.find("hostA"), std::string::npos) << hosts;
+  EXPECT_NE(hosts.find("hostB"), std::string::npos) << hosts;
 }
 
 TEST(BatchStudy, TheCylinderSweepClassifiesEverySample) {
