@@ -80,7 +80,9 @@ const std::string& FortySampleRun() {
 
 ::testing::AssertionResult IsPng(const std::string& path) {
   const std::string bytes = Read(path);
-  if (bytes.substr(0, 8) != std::string("\x89PNG\r\n\x1a\n", 8)) return ::testing::AssertionFailure() << path << " is no PNG";
+  if (bytes.substr(0, 8) != std::string("\x89PNG\r\n\x1a\n", 8)) {
+    return ::testing::AssertionFailure() << path << " is no PNG";
+  }
   if (bytes.size() < 10000) return ::testing::AssertionFailure() << path << ": only " << bytes.size() << " bytes";
   return ::testing::AssertionSuccess();
 }
@@ -244,7 +246,8 @@ TEST(BatchStudy, TheSlurmScriptPassesADryCheckAndEachArrayIndexRunsItsSample) {
   // The merge step: three lines, the rest reported missing (exit 1).
   EXPECT_EQ(Batch(kCubeSweep + " --out " + out + " --samples 40 --merge-only --no-report", out + "_merge"), 1);
   EXPECT_EQ(Read(out + "/results.jsonl"), reference[0] + "\n" + reference[17] + "\n" + reference[39] + "\n");
-  EXPECT_NE(Read(out + "_merge.err").find("37 samples have no line yet"), std::string::npos) << Read(out + "_merge.err");
+  const std::string merge_err = Read(out + "_merge.err");
+  EXPECT_NE(merge_err.find("37 samples have no line yet"), std::string::npos) << merge_err;
 }
 
 // --sshlogin: GNU parallel sends the samples to the hosts of the login list over ssh. PARALLEL_SSH points GNU
@@ -257,7 +260,9 @@ TEST(BatchStudy, AnSshLoginListSpreadsTheSamplesOverTheHosts) {
   const std::string fake_ssh = out + ".ssh", log = out + ".ssh.log";
   std::ofstream(fake_ssh) << "#!/bin/bash\n"
                              "echo \"$1\" >> " << log << "\n"
-                             "while [ $# -gt 0 ]; do case \"$1\" in --) shift; break;; -*) shift;; *) shift; break;; esac; done\n"
+                             "while [ $# -gt 0 ]; do\n"
+                             "  case \"$1\" in --) shift; break;; -*) shift;; *) shift; break;; esac\n"
+                             "done\n"
                              "[ \"${1:-}\" = -- ] && shift\n"
                              "exec bash -c \"$*\"\n";
   ASSERT_EQ(Shell("chmod +x " + fake_ssh), 0);
