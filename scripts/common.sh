@@ -9,7 +9,8 @@ export ROS_HOME=$WS/.ros ROS_LOG_DIR=$WS/.ros/log ROS_HOSTNAME=localhost
 APT_PACKAGES="build-essential cmake pkg-config googletest libgtest-dev catkin libroscpp-dev libtf2-ros-dev
   libgeometry-msgs-dev ros-geometry-msgs libsensor-msgs-dev ros-sensor-msgs libvisualization-msgs-dev libstd-msgs-dev ros-std-msgs libstd-srvs-dev
   libros-rosgraph-msgs-dev ros-message-generation ros-message-runtime librostest-dev python3-rostest
-  libeigen3-dev coinor-libipopt-dev libsuitesparse-dev liburdfdom-dev libtinyxml2-dev libdiagnostic-updater-dev python3-rosbag python3-matplotlib locales"
+  libeigen3-dev coinor-libipopt-dev libsuitesparse-dev liburdfdom-dev libtinyxml2-dev libdiagnostic-updater-dev python3-rosbag python3-matplotlib locales
+  parallel python3-yaml"
 
 install_packages() {
   local missing=""

@@ -27,7 +27,7 @@ def main(root):
                 print(f"FAILED {case.get('classname')}.{case.get('name')}: {problems[0].get('message', '')[:300]}")
             elif case.find("skipped") is None:
                 passed += 1
-    expected = ["gtest-test_core.xml", "rostest-test_ros_sim_node_p3.xml", "rosunit-test_sim_node.xml"]
+    expected = ["gtest-test_core.xml", "gtest-test_batch.xml", "rostest-test_ros_sim_node_p3.xml", "rosunit-test_sim_node.xml"]
     for name in expected:
         if not any(os.path.basename(f) == name for f in files):
             print(f"FAILED missing result file {name} (did the test binary build and run?)")

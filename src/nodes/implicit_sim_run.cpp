@@ -1,5 +1,6 @@
 // Headless runner: implicit_sim_run --scene FILE --duration T --dt H --out DIR
-// Writes DIR/trajectory.csv and DIR/summary.json (see README.md). No roscore needed.
+// Writes DIR/trajectory.csv and DIR/summary.json (see README.md). No roscore needed. With --stop-at-rest E:S the run
+// ends early once the kinetic energy has stayed below E (J) for S (s) of simulated time.
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
@@ -17,13 +18,16 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: implicit_sim_run --scene FILE --duration T --dt H --out DIR [--tolerance TOL] [--max-iterations N] "
-    "[--solver newton|ipopt]";
+    "[--solver newton|ipopt] [--stop-at-rest E:S]";
 
 struct Args {
   std::string scene, out;
   double duration = 0.0, dt = 0.01;
   implicit_sim::NewtonOptions newton;
   implicit_sim::StepperOptions::Solver solver = implicit_sim::StepperOptions::Solver::kNewton;
+  bool stop_at_rest = false;
+  double rest_energy = 0.0;  // J: "at rest" means kinetic energy < rest_energy
+  double rest_hold = 0.0;    // s: ... at every step over this much simulated time
 };
 
 // A finite number > 0, read with '.' as the decimal point whatever the locale (std::from_chars).
@@ -63,7 +67,7 @@ Args ParseArgs(int argc, char** argv) {
       std::exit(0);
     }
     if (flag != "--scene" && flag != "--duration" && flag != "--dt" && flag != "--out" && flag != "--tolerance" &&
-        flag != "--max-iterations" && flag != "--solver") {
+        flag != "--max-iterations" && flag != "--solver" && flag != "--stop-at-rest") {
       throw std::invalid_argument("unknown flag '" + flag + "' (" + kUsage + ")");
     }
     if (i + 1 >= argc) throw std::invalid_argument(flag + " needs a value");
@@ -94,6 +98,19 @@ Args ParseArgs(int argc, char** argv) {
     }
     args.solver = solver == "ipopt" ? implicit_sim::StepperOptions::Solver::kIpopt
                                     : implicit_sim::StepperOptions::Solver::kNewton;
+  }
+  if (values.count("--stop-at-rest")) {
+    const std::string& text = values["--stop-at-rest"];
+    const size_t colon = text.find(':');
+    if (colon == std::string::npos) {
+      throw std::invalid_argument("--stop-at-rest must be E:S (kinetic energy threshold in J > 0, hold time in s > 0), "
+                                  "got '" + text + "'");
+    }
+    args.rest_energy = ParsePositive("--stop-at-rest energy E (J, in E:S)", text.substr(0, colon));
+    args.rest_hold = ParsePositive("--stop-at-rest hold time S (s, in E:S)", text.substr(colon + 1));
+    CheckAtMost("--stop-at-rest energy E (J, in E:S)", args.rest_energy, 1e6);
+    CheckAtMost("--stop-at-rest hold time S (s, in E:S)", args.rest_hold, 1e6);
+    args.stop_at_rest = true;
   }
   if (args.duration / args.dt > 1e8) throw std::invalid_argument("--duration / --dt exceeds 1e8 steps");
   return args;
@@ -137,26 +154,50 @@ int main(int argc, char** argv) {
     }
     writer.WriteInitial(state);
     const long steps = std::lround(args.duration / options.h);
+    // At-rest detection: rest_since is the time of the first state of the current stretch of states with kinetic
+    // energy < rest_energy (t = 0 included); the run stops once the stretch lasts rest_hold (to half a step).
+    double rest_since = summary.kinetic_energy_initial < args.rest_energy ? state.t : -1.0;
+    std::string stop_reason = "duration";
     for (long i = 0; i < steps; ++i) {
       const StepReport report = Step(model, options, &state, &data);
       if (!report.advanced) {
         std::cerr << "implicit_sim_run: step " << i + 1 << " refused (" << StepFaultName(report.fault)
                   << (report.fault_detail.empty() ? "" : ": " + report.fault_detail) << "); stopping at t = "
                   << FormatNumber(state.t) << " s\n";
+        stop_reason = "refused";
         break;
       }
       summary.Add(report, data);
       writer.WriteStep(state, data, report);
+      if (args.stop_at_rest) {
+        if (KineticEnergy(model, state) < args.rest_energy) {
+          if (rest_since < 0.0) rest_since = state.t;
+          if (state.t - rest_since >= args.rest_hold - 0.5 * options.h) {
+            stop_reason = "at_rest";
+            break;
+          }
+        } else {
+          rest_since = -1.0;
+        }
+      }
     }
     summary.kinetic_energy_final = KineticEnergy(model, state);
     std::ofstream json(args.out + "/summary.json");
-    json << summary.ToJson();
+    // The runner's own keys go after the core's: t_end, stop_reason, and with --stop-at-rest time_to_rest (null when
+    // the body never came to rest).
+    std::string text = summary.ToJson();
+    std::string extra = ",\n  \"t_end\": " + FormatNumber(state.t) + ",\n  \"stop_reason\": \"" + stop_reason + "\"";
+    if (args.stop_at_rest) {
+      extra += ",\n  \"time_to_rest\": " + (stop_reason == "at_rest" ? FormatNumber(rest_since) : std::string("null"));
+    }
+    text.insert(text.rfind("\n}"), extra);
+    json << text;
     if (!json) throw std::runtime_error("cannot write '" + args.out + "/summary.json'");
     std::cout << "implicit_sim_run: " << summary.steps << " steps of " << FormatNumber(options.h) << " s, "
               << FormatNumber(1e6 * summary.wall_s / std::max(1, summary.steps)) << " us/step, max penetration "
               << FormatNumber(summary.max_penetration) << " m, non-converged steps " << summary.nonconverged_steps
               << "; wrote " << args.out << "/trajectory.csv and summary.json\n";
-    return summary.nonconverged_steps == 0 && summary.steps == steps ? 0 : 1;
+    return summary.nonconverged_steps == 0 && stop_reason != "refused" ? 0 : 1;
   } catch (const std::exception& e) {
     std::cerr << "implicit_sim_run: " << OneLine(e.what()) << "\n";
     return 1;
