@@ -126,4 +126,65 @@ int MostActiveInequality(const ConvexShape& shape, const Pose& X_WB, const Vec3&
   return best;
 }
 
+void SeedNormalConeMultipliers(const ConvexShape& shape, const Pose& X_WB, const Vec3& p_W, const Vec3& direction_W,
+                               double* multipliers) {
+  constexpr int kMaxActive = 8;
+  const Pose X_WS = X_WB * shape.X_BS;
+  const Vec3 x_S = X_WS.inverse() * p_W;
+  const int count = static_cast<int>(shape.inequalities.size());
+  double f_k;
+  Vec3 g_W[kMaxActive];
+  int index[kMaxActive], active = 0;
+  double f_max = -1e300;
+  for (int k = 0; k < count; ++k) {
+    multipliers[k] = 0.0;
+    double value;
+    shape.inequalities[k].Evaluate(x_S, &value, nullptr, nullptr);
+    f_max = std::max(f_max, value);
+  }
+  for (int k = 0; k < count && active < kMaxActive; ++k) {
+    Vec3 g_S;
+    shape.inequalities[k].Evaluate(x_S, &f_k, &g_S, nullptr);
+    if (f_k < f_max - 1e-5 || g_S.norm() < 1e-12) continue;
+    g_W[active] = X_WS.linear() * g_S;
+    index[active++] = k;
+  }
+  // Every subset of one to three active gradients: least squares, kept if non-negative and the best fit so far.
+  double best_residual = INFINITY, best_m[3] = {0.0, 0.0, 0.0};
+  int best_set[3] = {-1, -1, -1}, best_size = 0;
+  const auto try_subset = [&](const int* members, int size) {
+    Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, 3> G(3, size);
+    for (int i = 0; i < size; ++i) G.col(i) = g_W[members[i]];
+    const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1> m = G.colPivHouseholderQr().solve(direction_W);
+    if (!m.allFinite() || m.minCoeff() < 0.0) return;
+    const double residual = (G * m - direction_W).norm();
+    if (!(residual < best_residual - 1e-12)) return;
+    best_residual = residual;
+    best_size = size;
+    for (int i = 0; i < size; ++i) {
+      best_set[i] = members[i];
+      best_m[i] = m[i];
+    }
+  };
+  for (int a = 0; a < active; ++a) {
+    const int one[1] = {a};
+    try_subset(one, 1);
+    for (int b = a + 1; b < active; ++b) {
+      const int two[2] = {a, b};
+      try_subset(two, 2);
+      for (int c = b + 1; c < active; ++c) {
+        const int three[3] = {a, b, c};
+        try_subset(three, 3);
+      }
+    }
+  }
+  if (best_size == 0) {  // no non-negative combination: the most active inequality carries the normal
+    Vec3 normal;
+    double grad_norm = 1.0;
+    multipliers[MostActiveInequality(shape, X_WB, p_W, &normal, &grad_norm)] = direction_W.norm() / grad_norm;
+    return;
+  }
+  for (int i = 0; i < best_size; ++i) multipliers[index[best_set[i]]] = best_m[i];
+}
+
 }  // namespace implicit_sim

@@ -118,18 +118,18 @@ void SeedPair(const Model& model, const State& state, int c, const StepProblem& 
     p1 = X_WB1.translation();
     p2 = X_WB2.translation();
   }
-  Vec3 n, normal1;
-  double grad2 = 1.0, grad1 = 1.0;
-  const int k2 = MostActiveInequality(body2.shape, X_WB2, p2, &n, &grad2);
-  const int k1 = MostActiveInequality(body1.shape, X_WB1, p1, &normal1, &grad1);
+  Vec3 n;
+  double grad2 = 1.0;
+  MostActiveInequality(body2.shape, X_WB2, p2, &n, &grad2);
   if (cp.distance > 1e-9) n = (p1 - p2).normalized();  // separated: along the closest points
   z->segment(blk.offset, blk.size()).setZero();
   z->segment<3>(blk.offset + pi::kA1) = p1;
   z->segment<3>(blk.offset + pi::kA2) = p2;
   z->segment<3>(blk.offset + pi::kN) = n;
   (*z)[blk.offset + pi::kD] = n.dot(p1 - p2);
-  (*z)[blk.offset + pi::kAlpha + k1] = 1.0 / grad1;
-  (*z)[blk.beta() + k2] = 1.0 / grad2;
+  // -n = sum alpha grad f(a1), n = sum beta grad g(a2): every active inequality's multiplier (edges, corners, rims).
+  SeedNormalConeMultipliers(body1.shape, X_WB1, p1, -n, z->data() + blk.offset + pi::kAlpha);
+  SeedNormalConeMultipliers(body2.shape, X_WB2, p2, n, z->data() + blk.beta());
   (*z)[blk.ln()] = cp.distance < 1e-6 ? 0.5 * problem.force_scale() : 0.0;
 }
 

@@ -26,4 +26,13 @@ ClosestPointsResult FindClosestPoints(const ConvexShape& shape1, const Pose& X_W
 int MostActiveInequality(const ConvexShape& shape, const Pose& X_WB, const Vec3& p_W, Vec3* normal_W,
                          double* grad_norm);
 
+// Multipliers >= 0 of the inequalities active at p_W (within 1e-5 of the most active) whose combination of world
+// gradients sum_k m_k grad f_k(p) best matches `direction_W` (the normal cone condition of the step NCP), written to
+// multipliers[0 .. shape.inequalities.size()); the others are 0. At an edge or a corner several are positive: seeding
+// only the most active one leaves the others' curvature out of the Jacobian, which is then singular (a tilted
+// cylinder resting on its rim). Combinations of up to three active gradients are tried (Caratheodory); without a
+// non-negative one, the most active inequality carries the whole normal. No heap allocation.
+void SeedNormalConeMultipliers(const ConvexShape& shape, const Pose& X_WB, const Vec3& p_W, const Vec3& direction_W,
+                               double* multipliers);
+
 }  // namespace implicit_sim
