@@ -312,27 +312,29 @@ TEST(Joints, LoaderBuildsTheJointTreeWithFramesLimitsDynamicsAndStarts) {
   EXPECT_GE(model.PairIndex(model.FindBody("base"), model.FindBody("finger")), 0);
 }
 
-// With the broad phase and the sparse solve (KLU): the joint blocks stay in every NCP while pairs come and go. (With
-// every pair in the NCP, the distant box-cylinder pair of this robot stalls the first cold dense solve at h = 0.002;
-// the broad phase leaves it out.)
-TEST(Joints, EveryJointKindHoldsAtTheStepEndThroughContactFrictionAndLimitsInTheSparseSolve) {
+// Dense with every pair, and with the broad phase and the sparse solve (KLU): the joint blocks stay in every NCP
+// while pairs come and go.
+TEST(Joints, EveryJointKindHoldsAtTheStepEndThroughContactFrictionAndLimitsDenseAndSparse) {
   const Model model = test_models::JointedRobot();
-  double position_error = 0.0, angle_error = 0.0;
-  int touching_steps = 0;
-  const auto stats = RunScene(
-      model, 0.002, 2.0,
-      [&](const Model&, const State&, const Data&, const StepReport& r) {
-        position_error = std::max(position_error, r.joint_position_error);
-        angle_error = std::max(angle_error, r.joint_angle_error);
-        touching_steps += r.active_contacts > 0;
-      },
-      Data::PairSelection::kBroadPhase);
-  std::printf("[ joints ] jointed robot, 2 s: drift %.2e m, %.2e rad; %d non-converged steps, %d steps with contact\n",
-              position_error, angle_error, stats.nonconverged, touching_steps);
-  EXPECT_EQ(stats.nonconverged, 0);
-  EXPECT_LE(position_error, 1e-8);
-  EXPECT_LE(angle_error, 1e-8);
-  EXPECT_GT(touching_steps, 50);
+  for (const auto selection : {Data::PairSelection::kAllPairs, Data::PairSelection::kBroadPhase}) {
+    SCOPED_TRACE(selection == Data::PairSelection::kAllPairs ? "all pairs, dense" : "broad phase, sparse");
+    double position_error = 0.0, angle_error = 0.0;
+    int touching_steps = 0;
+    const auto stats = RunScene(
+        model, 0.002, 2.0,
+        [&](const Model&, const State&, const Data&, const StepReport& r) {
+          position_error = std::max(position_error, r.joint_position_error);
+          angle_error = std::max(angle_error, r.joint_angle_error);
+          touching_steps += r.active_contacts > 0;
+        },
+        selection);
+    std::printf("[ joints ] jointed robot, 2 s: drift %.2e m, %.2e rad; %d non-converged steps, %d steps with "
+                "contact\n", position_error, angle_error, stats.nonconverged, touching_steps);
+    EXPECT_EQ(stats.nonconverged, 0);
+    EXPECT_LE(position_error, 1e-8);
+    EXPECT_LE(angle_error, 1e-8);
+    EXPECT_GT(touching_steps, 50);
+  }
 }
 
 TEST(Joints, IpoptAgreesWithNewtonOnTheGripperWithItsJointRowsAndContacts) {
