@@ -3,6 +3,7 @@
 #include <cmath>
 #include <locale>
 #include <sstream>
+#include <stdexcept>
 
 namespace implicit_sim {
 namespace loader {

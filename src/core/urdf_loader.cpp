@@ -22,12 +22,8 @@ namespace implicit_sim {
 using namespace loader;
 namespace {
 
-
 // Larger scene files are refused before parsing (bytes): 32 MiB holds about 60000 S1 pile bodies.
 constexpr size_t kMaxSceneBytes = size_t{32} << 20;
-
-
-
 
 Pose ReadOrigin(const tinyxml2::XMLElement* e, const std::string& where) {
   const Vec3 xyz = ReadVec3(e, "xyz", where, Vec3::Zero());
@@ -38,8 +34,6 @@ Pose ReadOrigin(const tinyxml2::XMLElement* e, const std::string& where) {
                 Eigen::AngleAxisd(rpy[0], Vec3::UnitX())).toRotationMatrix();
   return X;
 }
-
-
 
 // One part of an <implicit type="intersection"> element.
 Inequality ReadPart(const tinyxml2::XMLElement* part, const std::string& where) {
@@ -142,7 +136,6 @@ ConvexShape ReadShape(const std::string& link, const urdf::Collision& collision,
 // urdfdom 3.0.1 drops a malformed <collision>, <visual> or <inertial> (it logs to the console and still returns a
 // model) and refuses a bad joint origin with a message that names no attribute. Checking its inputs first gives every
 // error the link and attribute, and no element is ever dropped silently.
-
 
 void CheckOrigin(const tinyxml2::XMLElement* parent, const std::string& where) {
   const tinyxml2::XMLElement* origin = parent->FirstChildElement("origin");

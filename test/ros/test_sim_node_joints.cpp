@@ -12,6 +12,7 @@
 #include <sensor_msgs/JointState.h>
 #include <std_srvs/Trigger.h>
 
+#include "implicit_sim/Contacts.h"
 #include "implicit_sim/GetBodyState.h"
 #include "implicit_sim/SetJointEfforts.h"
 #include "implicit_sim/Step.h"
@@ -88,6 +89,29 @@ TEST(SimNodeJoints, JointStatesListEveryMovableJointWithPositionVelocityAndEffor
   for (double qd : js.velocity) EXPECT_NEAR(qd, 0.0, 1e-12);
   EXPECT_NEAR(Field(js, js.effort, "lift"), 4.7088, 1e-9);  // the scene's constant efforts
   EXPECT_NEAR(Field(js, js.effort, "left_slide"), 2.0, 1e-12);
+}
+
+// The fingers' grip on the ball is published on ~contacts: 2 N normal force from each finger (the scene's efforts),
+// and friction carrying the ball's weight while the gripper is held still (lift effort set to hold everything).
+TEST(SimNodeJoints, TheGripIsPublishedAsTwoContactsWithTheFingerForces) {
+  EXPECT_TRUE(Trigger("reset"));
+  ASSERT_TRUE(Efforts({"lift"}, {-4.7088 + 0.4 * 9.81}).response.success);  // lift = total weight 3.924 N: at rest
+  RunSteps(50);
+  ros::WallDuration(0.1).sleep();
+  const auto contacts = ros::topic::waitForMessage<implicit_sim::Contacts>(kNs + "contacts", ros::Duration(5));
+  ASSERT_TRUE(contacts != nullptr);
+  int fingers = 0;
+  double friction = 0.0;
+  for (const auto& c : contacts->contacts) {
+    const bool finger = c.link1 == "ball" || c.link2 == "ball";
+    if (!finger) continue;
+    ++fingers;
+    EXPECT_NEAR(c.normal_force, 2.0, 1e-6);
+    friction += std::hypot(std::hypot(c.friction_force.x, c.friction_force.y), c.friction_force.z);
+  }
+  EXPECT_EQ(fingers, 2);
+  EXPECT_NEAR(friction, 0.1 * 9.81, 1e-6);  // the two contacts carry the ball's weight
+  EXPECT_TRUE(Trigger("reset"));
 }
 
 TEST(SimNodeJoints, BadEffortRequestsAreRefusedNamingTheProblemAndChangeNothing) {
