@@ -10,7 +10,8 @@ APT_PACKAGES="build-essential cmake pkg-config googletest libgtest-dev catkin li
   libgeometry-msgs-dev ros-geometry-msgs libsensor-msgs-dev ros-sensor-msgs libvisualization-msgs-dev libstd-msgs-dev ros-std-msgs libstd-srvs-dev
   libros-rosgraph-msgs-dev ros-message-generation ros-message-runtime librostest-dev python3-rostest
   libeigen3-dev coinor-libipopt-dev libsuitesparse-dev liburdfdom-dev libtinyxml2-dev libdiagnostic-updater-dev python3-rosbag python3-matplotlib locales
-  parallel python3-yaml"
+  parallel python3-yaml python3-rospy python3-geometry-msgs python3-sensor-msgs python3-tf2-msgs python3-visualization-msgs
+  python3-diagnostic-msgs"
 
 install_packages() {
   local missing=""
