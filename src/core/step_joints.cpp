@@ -16,21 +16,11 @@
 // Commanded joint efforts enter as external wrenches (AddJointEffortWrench) along the same G_q.
 #include <cmath>
 
+#include "fischer_burmeister.h"
 #include "implicit_sim/core/step_problem.h"
 
 namespace implicit_sim {
 namespace {
-
-struct FB {
-  double value, da, db;
-};
-// Fischer-Burmeister as in step_problem.cpp (raw: the function side b for the Ipopt formulation).
-FB JointFischerBurmeister(double a, double b, double mu, bool raw) {
-  if (raw) return {b, 0.0, 1.0};
-  const double r = std::sqrt(a * a + b * b + 2.0 * mu * mu);
-  if (r < 1e-14) return {a + b - r, 1.0 - 1.0 / std::sqrt(2.0), 1.0 - 1.0 / std::sqrt(2.0)};
-  return {a + b - r, 1.0 - a / r, 1.0 - b / r};
-}
 
 Pose MakePose(const Vec3& p, const Mat3& R) {
   Pose X = Pose::Identity();
@@ -140,8 +130,8 @@ void StepProblem::AddJointRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
     int col = o + m;
     if (joint.limited) {  // 0 <= l_lo _|_ q - lower >= 0 and 0 <= l_hi _|_ upper - q >= 0
       const double q = JointPosition(joint, X_WP, X_WC, &g);
-      const FB lo = JointFischerBurmeister(z[col] / Fs, q - joint.lower, smoothing_, raw_);
-      const FB hi = JointFischerBurmeister(z[col + 1] / Fs, joint.upper - q, smoothing_, raw_);
+      const FB lo = FischerBurmeister(z[col] / Fs, q - joint.lower, smoothing_, raw_);
+      const FB hi = FischerBurmeister(z[col + 1] / Fs, joint.upper - q, smoothing_, raw_);
       (*Phi)[col] = lo.value;
       (*Phi)[col + 1] = hi.value;
       if (want_J) {
@@ -159,7 +149,7 @@ void StepProblem::AddJointRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
       const double s = z[col], sigma = z[col + 1];
       (*Phi)[col] = rate + s * sigma;
       AddRateRow(col, G_q, eP, eC, 1.0);
-      const FB fb = JointFischerBurmeister(sigma, 1.0 - s * s, smoothing_, raw_);
+      const FB fb = FischerBurmeister(sigma, 1.0 - s * s, smoothing_, raw_);
       (*Phi)[col + 1] = fb.value;
       if (want_J) {
         AddJ(col, col, sigma + regularization_);

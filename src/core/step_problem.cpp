@@ -3,26 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fischer_burmeister.h"
 #include "implicit_sim/core/rotation.h"
 
 namespace implicit_sim {
 namespace pi = pair_index;
 namespace {
-
-// Fischer-Burmeister function and an element of its generalized Jacobian (at a = b = 0 any point of the
-// subdifferential works; we take the one on the diagonal).
-struct FB {
-  double value, da, db;
-};
-// With raw = true, b and its derivative instead (see StepProblem::set_raw_complementarity).
-// With smoothing mu > 0: a + b - sqrt(a^2 + b^2 + 2 mu^2), smooth everywhere, whose root set a, b > 0, a b = mu^2
-// tends to the complementarity set as mu -> 0 (smoothing continuation, Chen-Harker-Kanzow-Smale).
-FB FischerBurmeister(double a, double b, double mu, bool raw) {
-  if (raw) return {b, 0.0, 1.0};  // the complementarity function b itself (for the Ipopt formulation)
-  const double r = std::sqrt(a * a + b * b + 2.0 * mu * mu);
-  if (r < 1e-14) return {a + b - r, 1.0 - 1.0 / std::sqrt(2.0), 1.0 - 1.0 / std::sqrt(2.0)};
-  return {a + b - r, 1.0 - a / r, 1.0 - b / r};
-}
 
 // Tangent basis (t, o) from the normal n and a reference axis e fixed for the step (DESIGN.md pitfall 3):
 // t = (e - (e.n) n) / |e - (e.n) n|, o = n x t, with their derivatives with respect to n.
