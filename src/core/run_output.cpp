@@ -56,14 +56,17 @@ std::string RunSummary::ToJson() const {
   json += "  \"max_iterations\": " + std::to_string(max_iterations) + ",\n";
   json += "  \"max_residual\": " + FormatNumber(max_residual) + ",\n";
   json += "  \"kinetic_energy_initial\": " + FormatNumber(kinetic_energy_initial) + ",\n";
-  json += "  \"kinetic_energy_final\": " + FormatNumber(kinetic_energy_final) + (pairs.empty() ? "\n" : ",\n");
+  json += "  \"kinetic_energy_final\": " + FormatNumber(kinetic_energy_final) + ",\n";
   for (size_t i = 0; i < pairs.size(); ++i) {
     const FrictionParams& f = pairs[i].second;
     json += std::string(i == 0 ? "  \"pairs\": [\n" : "") + "    {\"name\": \"" + pairs[i].first + "\", \"mu\": " +
             FormatNumber(f.mu) + ", \"e_t\": " + FormatNumber(f.e_t) + ", \"e_o\": " + FormatNumber(f.e_o) +
-            ", \"e_r\": " + FormatNumber(f.e_r) + "}" + (i + 1 < pairs.size() ? ",\n" : "\n  ]\n");
+            ", \"e_r\": " + FormatNumber(f.e_r) + "}" + (i + 1 < pairs.size() ? ",\n" : "\n  ],\n");
   }
-  return json + "}\n";
+  json += "  \"t_end\": " + FormatNumber(t_end) + ",\n";
+  json += "  \"stop_reason\": \"" + stop_reason + "\"";
+  if (at_rest_rule) json += ",\n  \"time_to_rest\": " + (time_to_rest >= 0.0 ? FormatNumber(time_to_rest) : "null");
+  return json + "\n}\n";
 }
 
 TrajectoryWriter::TrajectoryWriter(const std::string& path, const Model& model, bool pair_columns,

@@ -157,14 +157,14 @@ int main(int argc, char** argv) {
     // At-rest detection: rest_since is the time of the first state of the current stretch of states with kinetic
     // energy < rest_energy (t = 0 included); the run stops once the stretch lasts rest_hold (to half a step).
     double rest_since = summary.kinetic_energy_initial < args.rest_energy ? state.t : -1.0;
-    std::string stop_reason = "duration";
+    summary.at_rest_rule = args.stop_at_rest;
     for (long i = 0; i < steps; ++i) {
       const StepReport report = Step(model, options, &state, &data);
       if (!report.advanced) {
         std::cerr << "implicit_sim_run: step " << i + 1 << " refused (" << StepFaultName(report.fault)
                   << (report.fault_detail.empty() ? "" : ": " + report.fault_detail) << "); stopping at t = "
                   << FormatNumber(state.t) << " s\n";
-        stop_reason = "refused";
+        summary.stop_reason = "refused";
         break;
       }
       summary.Add(report, data);
@@ -173,7 +173,8 @@ int main(int argc, char** argv) {
         if (KineticEnergy(model, state) < args.rest_energy) {
           if (rest_since < 0.0) rest_since = state.t;
           if (state.t - rest_since >= args.rest_hold - 0.5 * options.h) {
-            stop_reason = "at_rest";
+            summary.stop_reason = "at_rest";
+            summary.time_to_rest = rest_since;
             break;
           }
         } else {
@@ -183,21 +184,14 @@ int main(int argc, char** argv) {
     }
     summary.kinetic_energy_final = KineticEnergy(model, state);
     std::ofstream json(args.out + "/summary.json");
-    // The runner's own keys go after the core's: t_end, stop_reason, and with --stop-at-rest time_to_rest (null when
-    // the body never came to rest).
-    std::string text = summary.ToJson();
-    std::string extra = ",\n  \"t_end\": " + FormatNumber(state.t) + ",\n  \"stop_reason\": \"" + stop_reason + "\"";
-    if (args.stop_at_rest) {
-      extra += ",\n  \"time_to_rest\": " + (stop_reason == "at_rest" ? FormatNumber(rest_since) : std::string("null"));
-    }
-    text.insert(text.rfind("\n}"), extra);
-    json << text;
+    summary.t_end = state.t;
+    json << summary.ToJson();
     if (!json) throw std::runtime_error("cannot write '" + args.out + "/summary.json'");
     std::cout << "implicit_sim_run: " << summary.steps << " steps of " << FormatNumber(options.h) << " s, "
               << FormatNumber(1e6 * summary.wall_s / std::max(1, summary.steps)) << " us/step, max penetration "
               << FormatNumber(summary.max_penetration) << " m, non-converged steps " << summary.nonconverged_steps
               << "; wrote " << args.out << "/trajectory.csv and summary.json\n";
-    return summary.nonconverged_steps == 0 && stop_reason != "refused" ? 0 : 1;
+    return summary.nonconverged_steps == 0 && summary.stop_reason != "refused" ? 0 : 1;
   } catch (const std::exception& e) {
     std::cerr << "implicit_sim_run: " << OneLine(e.what()) << "\n";
     return 1;
