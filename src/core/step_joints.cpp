@@ -110,69 +110,76 @@ void StepProblem::AddJointForce(const JointGradient& g, double force, int col, d
 }
 
 void StepProblem::AddJointRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
-  const double Fs = force_scale_;
-  const bool want_J = J_dense_ || J_sparse_;
   for (size_t j = 0; j < model_.joints.size(); ++j) {
     const Joint& joint = model_.joints[j];
     const int o = joint_offset_[j], m = joint.num_equalities();
     const BodyEnd& eP = ParentEnd(joint);
     const BodyEnd& eC = end_[joint.child];
-    const Pose X_WP = MakePose(eP.p, eP.R), X_WC = MakePose(eC.p, eC.R);
     JointGradient g;
     for (int i = 0; i < m; ++i) {  // the equalities at the end of the step
-      (*Phi)[o + i] = JointEquality(joint, i, X_WP, X_WC, &g) / h_;
+      (*Phi)[o + i] = JointEquality(joint, i, MakePose(eP.p, eP.R), MakePose(eC.p, eC.R), &g) / h_;
       AddEndGradientRow(o + i, g, eP, eC, 1.0 / h_);
       AddJointForce(joint_equality_start_[j][i], z[o + i], o + i, 1.0, eP, eC, Phi);
     }
     if (!joint.has_coordinate()) continue;
     const JointGradient& G_q = joint_position_start_[j];
     if (joint.applied_effort != 0.0) AddJointForce(G_q, joint.applied_effort, -1, 0.0, eP, eC, Phi);
-    int col = o + m;
-    if (joint.limited) {  // 0 <= l_lo _|_ q - lower >= 0 and 0 <= l_hi _|_ upper - q >= 0
-      const double q = JointPosition(joint, X_WP, X_WC, &g);
-      const FB lo = FischerBurmeister(z[col] / Fs, q - joint.lower, smoothing_, raw_);
-      const FB hi = FischerBurmeister(z[col + 1] / Fs, joint.upper - q, smoothing_, raw_);
-      (*Phi)[col] = lo.value;
-      (*Phi)[col + 1] = hi.value;
-      if (want_J) {
-        AddJ(col, col, (lo.da + regularization_) / Fs);
-        AddJ(col + 1, col + 1, (hi.da + regularization_) / Fs);
-      }
-      AddEndGradientRow(col, g, eP, eC, lo.db);
-      AddEndGradientRow(col + 1, g, eP, eC, -hi.db);
-      AddJointForce(G_q, z[col], col, 1.0, eP, eC, Phi);
-      AddJointForce(G_q, -z[col + 1], col + 1, -1.0, eP, eC, Phi);
-      col += 2;
-    }
-    const double rate = G_q.Rate(eP.v, eP.w, eC.v, eC.w);  // end-of-step joint velocity (rad/s or m/s)
-    if (joint.friction > 0.0) {  // qdot + s sigma = 0, 0 <= sigma _|_ 1 - s^2 >= 0; force F_c s
-      const double s = z[col], sigma = z[col + 1];
-      (*Phi)[col] = rate + s * sigma;
-      AddRateRow(col, G_q, eP, eC, 1.0);
-      const FB fb = FischerBurmeister(sigma, 1.0 - s * s, smoothing_, raw_);
-      (*Phi)[col + 1] = fb.value;
-      if (want_J) {
-        AddJ(col, col, sigma + regularization_);
-        AddJ(col, col + 1, s);
-        AddJ(col + 1, col + 1, fb.da);
-        AddJ(col + 1, col, -2.0 * fb.db * s);
-      }
-      AddJointForce(G_q, joint.friction * s, col, joint.friction, eP, eC, Phi);
-    }
-    if (joint.damping > 0.0) {  // -c qdot along G_q, implicit in the end-of-step velocities
-      AddJointForce(G_q, -joint.damping * rate, -1, 0.0, eP, eC, Phi);
-      if (want_J) {
-        // Body rows of P and C: + (c / Fs) G_q G_q^T over the velocity columns of P and C, in 3 x 3 blocks.
-        const double k = joint.damping / Fs;
-        const Vec3 gP[2] = {G_q.dp_P, G_q.dth_P}, gC[2] = {G_q.dp_C, G_q.dth_C};
-        for (const auto& [row, g_row] : {std::make_pair(eP.col, gP), std::make_pair(eC.col, gC)}) {
-          for (int i = 0; row >= 0 && i < 2; ++i) {
-            for (int m2 = 0; m2 < 2; ++m2) {
-              if (eP.col >= 0) AddJ(row + 3 * i, eP.col + 3 * m2, Mat3(k * g_row[i] * gP[m2].transpose()));
-              AddJ(row + 3 * i, eC.col + 3 * m2, Mat3(k * g_row[i] * gC[m2].transpose()));
-            }
-          }
-        }
+    if (joint.limited) AddJointLimitRows(joint, o + m, z, eP, eC, G_q, Phi);
+    if (joint.friction > 0.0) AddJointFrictionRows(joint, o + m + (joint.limited ? 2 : 0), z, eP, eC, G_q, Phi);
+    if (joint.damping > 0.0) AddJointDamping(joint, eP, eC, G_q, Phi);
+  }
+}
+
+// 0 <= l_lo _|_ q - lower >= 0 and 0 <= l_hi _|_ upper - q >= 0 at rows col, col + 1; q at the end of the step.
+void StepProblem::AddJointLimitRows(const Joint& joint, int col, const Eigen::VectorXd& z, const BodyEnd& eP,
+                                    const BodyEnd& eC, const JointGradient& G_q, Eigen::VectorXd* Phi) {
+  const double Fs = force_scale_;
+  JointGradient g;
+  const double q = JointPosition(joint, MakePose(eP.p, eP.R), MakePose(eC.p, eC.R), &g);
+  const FB lo = FischerBurmeister(z[col] / Fs, q - joint.lower, smoothing_, raw_);
+  const FB hi = FischerBurmeister(z[col + 1] / Fs, joint.upper - q, smoothing_, raw_);
+  (*Phi)[col] = lo.value;
+  (*Phi)[col + 1] = hi.value;
+  if (J_dense_ || J_sparse_) {
+    AddJ(col, col, (lo.da + regularization_) / Fs);
+    AddJ(col + 1, col + 1, (hi.da + regularization_) / Fs);
+  }
+  AddEndGradientRow(col, g, eP, eC, lo.db);
+  AddEndGradientRow(col + 1, g, eP, eC, -hi.db);
+  AddJointForce(G_q, z[col], col, 1.0, eP, eC, Phi);
+  AddJointForce(G_q, -z[col + 1], col + 1, -1.0, eP, eC, Phi);
+}
+
+// Coulomb joint friction at rows col, col + 1: qdot + s sigma = 0 and 0 <= sigma _|_ 1 - s^2 >= 0; force F_c s.
+void StepProblem::AddJointFrictionRows(const Joint& joint, int col, const Eigen::VectorXd& z, const BodyEnd& eP,
+                                       const BodyEnd& eC, const JointGradient& G_q, Eigen::VectorXd* Phi) {
+  const double s = z[col], sigma = z[col + 1];
+  (*Phi)[col] = G_q.Rate(eP.v, eP.w, eC.v, eC.w) + s * sigma;  // the end-of-step joint velocity (rad/s or m/s)
+  AddRateRow(col, G_q, eP, eC, 1.0);
+  const FB fb = FischerBurmeister(sigma, 1.0 - s * s, smoothing_, raw_);
+  (*Phi)[col + 1] = fb.value;
+  if (J_dense_ || J_sparse_) {
+    AddJ(col, col, sigma + regularization_);
+    AddJ(col, col + 1, s);
+    AddJ(col + 1, col + 1, fb.da);
+    AddJ(col + 1, col, -2.0 * fb.db * s);
+  }
+  AddJointForce(G_q, joint.friction * s, col, joint.friction, eP, eC, Phi);
+}
+
+// Viscous damping -c qdot along G_q, implicit in the end-of-step velocities.
+void StepProblem::AddJointDamping(const Joint& joint, const BodyEnd& eP, const BodyEnd& eC, const JointGradient& G_q,
+                                  Eigen::VectorXd* Phi) {
+  AddJointForce(G_q, -joint.damping * G_q.Rate(eP.v, eP.w, eC.v, eC.w), -1, 0.0, eP, eC, Phi);
+  if (!J_dense_ && !J_sparse_) return;
+  // Body rows of P and C: + (c / Fs) G_q G_q^T over the velocity columns of P and C, in 3 x 3 blocks.
+  const double k = joint.damping / force_scale_;
+  const Vec3 gP[2] = {G_q.dp_P, G_q.dth_P}, gC[2] = {G_q.dp_C, G_q.dth_C};
+  for (const auto& [row, g_row] : {std::make_pair(eP.col, gP), std::make_pair(eC.col, gC)}) {
+    for (int i = 0; row >= 0 && i < 2; ++i) {
+      for (int k2 = 0; k2 < 2; ++k2) {
+        if (eP.col >= 0) AddJ(row + 3 * i, eP.col + 3 * k2, Mat3(k * g_row[i] * gP[k2].transpose()));
+        AddJ(row + 3 * i, eC.col + 3 * k2, Mat3(k * g_row[i] * gC[k2].transpose()));
       }
     }
   }

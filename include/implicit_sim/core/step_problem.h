@@ -200,6 +200,12 @@ class StepProblem {
   void AddRateRow(int row, const JointGradient& g, const BodyEnd& eP, const BodyEnd& eC, double scale);
   void AddJointForce(const JointGradient& g, double force, int col, double dforce_dcol, const BodyEnd& eP,
                      const BodyEnd& eC, Eigen::VectorXd* Phi);
+  void AddJointLimitRows(const Joint& joint, int col, const Eigen::VectorXd& z, const BodyEnd& eP, const BodyEnd& eC,
+                         const JointGradient& G_q, Eigen::VectorXd* Phi);
+  void AddJointFrictionRows(const Joint& joint, int col, const Eigen::VectorXd& z, const BodyEnd& eP,
+                            const BodyEnd& eC, const JointGradient& G_q, Eigen::VectorXd* Phi);
+  void AddJointDamping(const Joint& joint, const BodyEnd& eP, const BodyEnd& eC, const JointGradient& G_q,
+                       Eigen::VectorXd* Phi);
   const BodyEnd& ParentEnd(const Joint& joint) const { return joint.parent < 0 ? world_end_ : end_[joint.parent]; }
   // Adds `block` to J at (row, col), dense or sparse (every call emits the same entries for the same layout, so that
   // the sparse pattern recorded once stays valid). Rows of locked velocities become "velocity = 0".
