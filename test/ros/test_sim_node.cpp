@@ -36,38 +36,21 @@
 #include "implicit_sim/StepStats.h"
 #include "implicit_sim/core/time_stepper.h"
 #include "implicit_sim/core/urdf_loader.h"
+#include "node_test_support.h"
 
 namespace {
 
-const std::string kNs = "/implicit_sim/";
+using node_test::Call;
+using node_test::DiagnosticValue;
+using node_test::kNs;
+using node_test::Trigger;
 using StepSrv = struct implicit_sim::Step;  // the service type; the core's Step() function hides the bare name
 constexpr double kH = 0.01;
-
-template <typename Srv>
-Srv Call(const std::string& name, Srv srv = Srv()) {
-  EXPECT_TRUE(ros::service::waitForService(kNs + name, ros::Duration(10)));
-  EXPECT_TRUE(ros::service::call(kNs + name, srv)) << name;
-  return srv;
-}
-
-bool Trigger(const std::string& name) { return Call<std_srvs::Trigger>(name).response.success; }
 
 StepSrv RunSteps(uint32_t n) {
   StepSrv s;
   s.request.steps = n;
   return Call(std::string("step"), s);
-}
-
-// The latest value of `key` in the node's /diagnostics status (published every second), as an integer.
-long DiagnosticValue(const std::string& key) {
-  ros::WallDuration(1.1).sleep();  // a report that covers everything before this call
-  const auto diagnostics =
-      ros::topic::waitForMessage<diagnostic_msgs::DiagnosticArray>("/diagnostics", ros::Duration(5));
-  if (!diagnostics || diagnostics->status.empty()) return -1;
-  for (const auto& kv : diagnostics->status[0].values) {
-    if (kv.key == key) return std::stol(kv.value);
-  }
-  return -1;
 }
 
 implicit_sim::BodyState Ball() {
@@ -602,12 +585,4 @@ TEST(SimNode, SubscriberChurnAndAStalledSubscriberLeaveStepsAndMemoryAlone) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_sim_node");
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  ros::shutdown();
-  return result;
-}
+int main(int argc, char** argv) { return node_test::RunAllTests(argc, argv, "test_sim_node"); }

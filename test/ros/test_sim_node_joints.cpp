@@ -16,19 +16,14 @@
 #include "implicit_sim/GetBodyState.h"
 #include "implicit_sim/SetJointEfforts.h"
 #include "implicit_sim/Step.h"
+#include "node_test_support.h"
 
 namespace {
 
-const std::string kNs = "/implicit_sim/";
-
-template <typename Srv>
-Srv Call(const std::string& name, Srv srv = Srv()) {
-  EXPECT_TRUE(ros::service::waitForService(kNs + name, ros::Duration(10)));
-  EXPECT_TRUE(ros::service::call(kNs + name, srv)) << name;
-  return srv;
-}
-
-bool Trigger(const std::string& name) { return Call<std_srvs::Trigger>(name).response.success; }
+using node_test::Call;
+using node_test::DiagnosticValue;
+using node_test::kNs;
+using node_test::Trigger;
 
 void RunSteps(uint32_t n) {
   implicit_sim::Step s;
@@ -58,17 +53,6 @@ double Field(const sensor_msgs::JointState& js, const std::vector<double>& value
   }
   ADD_FAILURE() << "joint '" << name << "' missing from /joint_states";
   return NAN;
-}
-
-long DiagnosticValue(const std::string& key) {
-  ros::WallDuration(1.1).sleep();
-  const auto diagnostics =
-      ros::topic::waitForMessage<diagnostic_msgs::DiagnosticArray>("/diagnostics", ros::Duration(5));
-  if (!diagnostics || diagnostics->status.empty()) return -1;
-  for (const auto& kv : diagnostics->status[0].values) {
-    if (kv.key == key) return std::stol(kv.value);
-  }
-  return -1;
 }
 
 implicit_sim::SetJointEfforts Efforts(const std::vector<std::string>& names, const std::vector<double>& efforts) {
@@ -193,12 +177,4 @@ TEST(SimNodeJoints, BadJointEffortMessagesAreDroppedAndCountedAndAGoodOneActs) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_sim_node_joints");
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  ros::shutdown();
-  return result;
-}
+int main(int argc, char** argv) { return node_test::RunAllTests(argc, argv, "test_sim_node_joints"); }
