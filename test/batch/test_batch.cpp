@@ -252,7 +252,8 @@ TEST(BatchStudy, TheSlurmScriptPassesADryCheckAndEachArrayIndexRunsItsSample) {
 
 // --sshlogin: GNU parallel sends the samples to the hosts of the login list over ssh. PARALLEL_SSH points GNU
 // parallel at a stand-in for ssh that logs the host and runs the remote command here, so both "hosts" get samples
-// through the same quoting and transport path a real ssh takes.
+// through the same quoting and transport path a real ssh takes. Like sshd, the stand-in gives the remote command a
+// SHELL (GNU parallel's remote wrapper runs the job with $SHELL and does nothing without it; CI runs without one).
 TEST(BatchStudy, AnSshLoginListSpreadsTheSamplesOverTheHosts) {
   const std::vector<std::string> reference = Lines(FortySampleRun());
   ASSERT_EQ(reference.size(), 40u);
@@ -260,6 +261,7 @@ TEST(BatchStudy, AnSshLoginListSpreadsTheSamplesOverTheHosts) {
   const std::string fake_ssh = out + ".ssh", log = out + ".ssh.log";
   std::ofstream(fake_ssh) << "#!/bin/bash\n"
                              "echo \"$1\" >> " << log << "\n"
+                             "export SHELL=/bin/bash\n"
                              "while [ $# -gt 0 ]; do\n"
                              "  case \"$1\" in --) shift; break;; -*) shift;; *) shift; break;; esac\n"
                              "done\n"
@@ -269,7 +271,7 @@ TEST(BatchStudy, AnSshLoginListSpreadsTheSamplesOverTheHosts) {
   ASSERT_EQ(Batch(kCubeSweep + " --out " + out + " --samples 6 --sshlogin 1/hostA,1/hostB", out,
                   "PARALLEL_SSH=" + fake_ssh),
             0)
-      << Read(out + ".err");
+      << Read(out + ".err") << Read(out + "/parallel.joblog");
   const std::vector<std::string> lines = Lines(Read(out + "/results.jsonl"));
   ASSERT_EQ(lines.size(), 6u);
   for (size_t i = 0; i < lines.size(); ++i) EXPECT_EQ(lines[i], reference[i]);
