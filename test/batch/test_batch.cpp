@@ -278,6 +278,18 @@ TEST(BatchStudy, AnSshLoginListSpreadsTheSamplesOverTheHosts) {
   const std::string hosts = Read(log);
   EXPECT_NE(hosts.find("hostA"), std::string::npos) << hosts;
   EXPECT_NE(hosts.find("hostB"), std::string::npos) << hosts;
+
+  // A host whose jobs exit 0 but whose lines never reach DIR (DIR not shared with it): the samples are reported
+  // missing with the host named, not silently lost.
+  const std::string lost = TempDir("ssh_lost"), lossy_ssh = lost + ".ssh";
+  std::ofstream(lossy_ssh) << "#!/bin/bash\nexit 0\n";
+  ASSERT_EQ(Shell("chmod +x " + lossy_ssh), 0);
+  EXPECT_EQ(Batch(kCubeSweep + " --out " + lost + " --samples 2 --sshlogin 1/hostC --no-report", lost,
+                  "PARALLEL_SSH=" + lossy_ssh),
+            1);
+  const std::string lost_err = Read(lost + ".err");
+  EXPECT_NE(lost_err.find("2 samples (0, 1) exited 0 on host 'hostC' but left no line"), std::string::npos)
+      << lost_err;
 }
 
 TEST(BatchStudy, TheCylinderSweepClassifiesEverySample) {
