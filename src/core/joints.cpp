@@ -113,6 +113,11 @@ void JointDrift(const Model& model, const State& state, double* position_m, doub
   }
 }
 
+double ClampJointEffort(const Joint& joint, double commanded) {
+  const double limit = joint.effort_limit > 0.0 ? joint.effort_limit : INFINITY;
+  return std::clamp(commanded, -limit, limit);
+}
+
 void AddJointEffortWrench(const Model& model, const State& state, const Eigen::VectorXd& efforts,
                           Eigen::VectorXd* wrench_W) {
   if (efforts.size() != static_cast<int>(model.joints.size()) || wrench_W->size() != 6 * model.num_moving()) {
@@ -123,8 +128,7 @@ void AddJointEffortWrench(const Model& model, const State& state, const Eigen::V
   for (size_t j = 0; j < model.joints.size(); ++j) {
     const Joint& joint = model.joints[j];
     if (!joint.has_coordinate() || efforts[j] == 0.0) continue;
-    const double limit = joint.effort_limit > 0.0 ? joint.effort_limit : INFINITY;
-    const double effort = std::clamp(efforts[j], -limit, limit);
+    const double effort = ClampJointEffort(joint, efforts[j]);
     JointGradient g;
     JointPosition(joint, ParentPose(model, state, joint), state.X_WB(model, joint.child), &g);
     for (const auto& [body, dp, dth] : {std::make_tuple(joint.parent, g.dp_P, g.dth_P),

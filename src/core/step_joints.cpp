@@ -115,9 +115,10 @@ void StepProblem::AddJointRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
     const int o = joint_offset_[j], m = joint.num_equalities();
     const BodyEnd& eP = ParentEnd(joint);
     const BodyEnd& eC = end_[joint.child];
+    const Pose X_WP = MakePose(eP.p, eP.R), X_WC = MakePose(eC.p, eC.R);  // end of step
     JointGradient g;
     for (int i = 0; i < m; ++i) {  // the equalities at the end of the step
-      (*Phi)[o + i] = JointEquality(joint, i, MakePose(eP.p, eP.R), MakePose(eC.p, eC.R), &g) / h_;
+      (*Phi)[o + i] = JointEquality(joint, i, X_WP, X_WC, &g) / h_;
       AddEndGradientRow(o + i, g, eP, eC, 1.0 / h_);
       AddJointForce(joint_equality_start_[j][i], z[o + i], o + i, 1.0, eP, eC, Phi);
     }

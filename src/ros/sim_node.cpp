@@ -19,13 +19,11 @@ namespace implicit_sim {
 namespace conv = ros_conversions;
 namespace {
 
-constexpr double kMaxWrench = 1e9;  // N and N m: larger commands are refused (they only drive a step into divergence)
-
-// Sets *error when a commanded force (N) or torque (N m) is non-finite or larger than kMaxWrench.
+// Sets *error when a commanded force (N) or torque (N m) is non-finite or larger than kMaxCommand.
 void CheckWrenchValues(const Vec3& force, const Vec3& torque, std::string* error) {
   if (!force.allFinite() || !torque.allFinite()) {
     *error = "wrench must be finite";
-  } else if (force.norm() > kMaxWrench || torque.norm() > kMaxWrench) {
+  } else if (force.norm() > kMaxCommand || torque.norm() > kMaxCommand) {
     *error = "wrench too large: |force| and |torque| must be <= 1e9 (N, N m)";
   }
 }

@@ -2,7 +2,6 @@
 // /joint_states. Efforts enter the step as the wrench of AddJointEffortWrench (core joints.h).
 #include "implicit_sim/ros/sim_node.h"  // first: its generated service type Step precedes the core's function Step
 
-#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -13,12 +12,9 @@
 namespace implicit_sim {
 namespace {
 
-constexpr double kMaxJointEffort = 1e9;  // N m and N: the wrench commands' bound
-
 // The effort the core applies for a command: clamped to the URDF effort limit, plus the scene's constant effort.
 double AppliedEffort(const Joint& joint, double commanded) {
-  const double limit = joint.effort_limit > 0.0 ? joint.effort_limit : INFINITY;
-  return std::clamp(commanded, -limit, limit) + joint.applied_effort;
+  return ClampJointEffort(joint, commanded) + joint.applied_effort;
 }
 
 }  // namespace
@@ -37,7 +33,7 @@ bool SimNode::SetJointEffortsLocked(const std::vector<std::string>& names, const
       *error = "no revolute, continuous or prismatic joint '" + names[i] + "' in the scene";
       return false;
     }
-    if (!std::isfinite(efforts[i]) || std::abs(efforts[i]) > kMaxJointEffort) {
+    if (!std::isfinite(efforts[i]) || std::abs(efforts[i]) > kMaxCommand) {
       *error = "effort of joint '" + names[i] + "' = " + FormatNumber(efforts[i]) +
                " must be finite with |effort| <= 1e9 (N m or N)";
       return false;

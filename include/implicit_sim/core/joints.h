@@ -43,9 +43,12 @@ double JointVelocity(const Model& model, const State& state, int joint);      //
 // The largest violation of any joint equality in `state`: of the linear rows (m) and of the angular rows (rad).
 void JointDrift(const Model& model, const State& state, double* position_m, double* angle_rad);
 
+// A commanded effort (N m or N) clamped to +-joint.effort_limit when that is > 0.
+double ClampJointEffort(const Joint& joint, double commanded);
+
 // Adds the wrench of joint efforts (one per model joint: N m for revolute and continuous joints, N for prismatic;
 // fixed joints take none) at the configuration of `state` to wrench_W (6 values per moving body slot: force, torque;
-// world frame, at the centre of mass). Each effort is clamped to +-Joint::effort_limit when that is > 0. Throws
+// world frame, at the centre of mass). Each effort is clamped by ClampJointEffort. Throws
 // std::invalid_argument (and adds nothing) if the sizes do not match or an effort is not finite.
 void AddJointEffortWrench(const Model& model, const State& state, const Eigen::VectorXd& efforts,
                           Eigen::VectorXd* wrench_W);

@@ -28,6 +28,10 @@
 
 namespace implicit_sim {
 
+// The largest command the node accepts: |force| (N), |torque| (N m) and |joint effort| (N m or N). Larger commands
+// are refused; they only drive a step into divergence.
+constexpr double kMaxCommand = 1e9;
+
 // Node parameters (private namespace ~), validated at startup.
 struct NodeParams {
   std::string scene;              // scene file path, or a name resolved as <scenes_dir>/<name>.urdf; "" -> robot_description
