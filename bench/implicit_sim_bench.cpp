@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
-#include "implicit_sim/core/pile_scene.h"
-#include "implicit_sim/core/run_output.h"
-#include "implicit_sim/core/time_stepper.h"
-#include "implicit_sim/core/urdf_loader.h"
+#include "implicit_sim/core/io/pile_scene.h"
+#include "implicit_sim/core/io/run_output.h"
+#include "implicit_sim/core/step/time_stepper.h"
+#include "implicit_sim/core/model/urdf_loader.h"
 
 namespace {
 using namespace implicit_sim;

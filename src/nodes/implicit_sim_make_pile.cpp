@@ -5,7 +5,7 @@
 #include <map>
 #include <string>
 
-#include "implicit_sim/core/pile_scene.h"
+#include "implicit_sim/core/io/pile_scene.h"
 
 int main(int argc, char** argv) {
   const char* usage = "usage: implicit_sim_make_pile --n N --shape sphere|ellipsoid [--seed S] --out FILE";

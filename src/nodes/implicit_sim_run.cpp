@@ -9,10 +9,10 @@
 #include <map>
 #include <string>
 
-#include "implicit_sim/core/run_output.h"
-#include "implicit_sim/core/state.h"
-#include "implicit_sim/core/time_stepper.h"
-#include "implicit_sim/core/urdf_loader.h"
+#include "implicit_sim/core/io/run_output.h"
+#include "implicit_sim/core/model/state.h"
+#include "implicit_sim/core/step/time_stepper.h"
+#include "implicit_sim/core/model/urdf_loader.h"
 
 namespace {
 

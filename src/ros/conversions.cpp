@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "implicit_sim/core/run_output.h"
+#include "implicit_sim/core/base/format.h"
 
 namespace implicit_sim {
 namespace ros_conversions {

@@ -11,8 +11,8 @@
 #include "implicit_sim/BodyStates.h"
 #include "implicit_sim/Contacts.h"
 #include "implicit_sim/StepStats.h"
-#include "implicit_sim/core/run_output.h"
-#include "implicit_sim/core/urdf_loader.h"
+#include "implicit_sim/core/base/format.h"
+#include "implicit_sim/core/model/urdf_loader.h"
 #include "implicit_sim/ros/conversions.h"
 
 namespace implicit_sim {

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "implicit_sim/core/joints.h"
-#include "implicit_sim/core/run_output.h"
+#include "implicit_sim/core/model/joints.h"
+#include "implicit_sim/core/base/format.h"
 
 namespace implicit_sim {
 namespace {

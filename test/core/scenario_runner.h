@@ -7,10 +7,10 @@
 #include <limits>
 #include <string>
 
-#include "implicit_sim/core/distance_oracle.h"
-#include "implicit_sim/core/state.h"
-#include "implicit_sim/core/time_stepper.h"
-#include "implicit_sim/core/urdf_loader.h"
+#include "implicit_sim/core/geometry/distance_oracle.h"
+#include "implicit_sim/core/model/state.h"
+#include "implicit_sim/core/step/time_stepper.h"
+#include "implicit_sim/core/model/urdf_loader.h"
 
 namespace implicit_sim {
 namespace testing_support {

@@ -3,8 +3,8 @@
 
 #include <string>
 
-#include "implicit_sim/core/model.h"
-#include "implicit_sim/core/urdf_loader.h"
+#include "implicit_sim/core/model/model.h"
+#include "implicit_sim/core/model/urdf_loader.h"
 
 namespace implicit_sim {
 namespace test_models {

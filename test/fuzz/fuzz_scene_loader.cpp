@@ -40,7 +40,7 @@
 
 #include <console_bridge/console.h>
 
-#include "implicit_sim/core/urdf_loader.h"
+#include "implicit_sim/core/model/urdf_loader.h"
 
 #if defined(__SANITIZE_ADDRESS__)  // g++
 #define IMPLICIT_SIM_FUZZ_SANITIZED 1

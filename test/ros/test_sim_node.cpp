@@ -34,8 +34,8 @@
 #include "implicit_sim/SetBodyState.h"
 #include "implicit_sim/Step.h"
 #include "implicit_sim/StepStats.h"
-#include "implicit_sim/core/time_stepper.h"
-#include "implicit_sim/core/urdf_loader.h"
+#include "implicit_sim/core/step/time_stepper.h"
+#include "implicit_sim/core/model/urdf_loader.h"
 #include "node_test_support.h"
 
 namespace {

@@ -10,9 +10,9 @@
 
 #include "implicit_sim/BodyState.h"
 #include "implicit_sim/ContactState.h"
-#include "implicit_sim/core/model.h"
-#include "implicit_sim/core/state.h"
-#include "implicit_sim/core/step_problem.h"
+#include "implicit_sim/core/model/model.h"
+#include "implicit_sim/core/model/state.h"
+#include "implicit_sim/core/step/data.h"
 
 namespace implicit_sim {
 namespace ros_conversions {

@@ -23,8 +23,8 @@
 #include "implicit_sim/SetBodyState.h"
 #include "implicit_sim/SetJointEfforts.h"
 #include "implicit_sim/Step.h"
-#include "implicit_sim/core/model.h"
-#include "implicit_sim/core/time_stepper.h"
+#include "implicit_sim/core/model/model.h"
+#include "implicit_sim/core/step/time_stepper.h"
 
 namespace implicit_sim {
 

@@ -1,0 +1,37 @@
+// The S1 scaling scene of ../shared/scenarios/SCENARIOS.md as a generator: N spheres (r = 0.05 m) or ellipsoids
+// (semi-axes 0.06, 0.05, 0.04 m), 0.1 kg each, at rest in a 1 m x 1 m box (a floor z = 0 and four walls at
+// x, y = +-0.5, all half-spaces), mu = 0.5 (e_t = e_o = 1, e_r = 0.01 m: not given by the scenario).
+// Body i: layer = i / 64, row = (i / 8) % 8, col = i % 8;
+// x = -0.42 + 0.12 col + j1, y = -0.42 + 0.12 row + j2, z = 0.08 + 0.12 layer + |j3|, with j1, j2, j3 drawn in that
+// order from std::uniform_real_distribution(-0.01, 0.01) over std::mt19937(seed).
+//
+// The ellipsoid layout overlaps: centre spacing along x is 0.12 +- 0.02 m for bodies 0.12 m long along x (the
+// distance oracle finds 44 touching or overlapping pairs at N = 100), and a step that starts overlapping ends separated
+// only through a large impulse (about 4 m/s within one 5 ms step). By default the generator therefore spreads each
+// row of 8 to a spacing of at least 0.12 m along x, the least-squares change of the x-centres (isotonic regression by
+// pool-adjacent-violators); y and z spacings cannot overlap (>= 0.10 m for a 0.10 m width, 0.12 m for a 0.08 m
+// height), so the result overlaps nowhere, and a row needs 0.84 m of the 0.88 m the walls leave. The URDF comment
+// says how many bodies moved and the largest shift. Spheres never overlap and are left as they are.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "implicit_sim/core/geometry/shapes.h"
+
+namespace implicit_sim {
+
+enum class PileShape { kSphere, kEllipsoid };
+
+// The scenario's poses of bodies 0 .. n-1 (axis-aligned).
+std::vector<Pose> PileLayout(int n, unsigned seed);
+
+// Spreads each row of 8 consecutive bodies (ascending x) so that x-centres are at least `length` apart, with the
+// least-squares change of the x-centres; returns how many bodies moved.
+int SeparateRows(std::vector<Pose>* X_WB, double length);
+
+// The scene as URDF text (links "floor", "wall_px", "wall_nx", "wall_py", "wall_ny", "body_<i>").
+// Throws std::invalid_argument for n outside [1, 100000].
+std::string MakePileUrdf(int n, PileShape shape, unsigned seed = 42, bool separate_overlaps = true);
+
+}  // namespace implicit_sim

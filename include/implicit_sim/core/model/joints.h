@@ -1,0 +1,56 @@
+// Joint kinematics: the constraint functions of a joint, its position and velocity, and the wrench of a joint effort.
+// The step NCP (step_problem.h), the runner and the ROS node share them.
+//
+// A joint joins the joint origin x_P = p_P + R_P p_PJ on its parent to x_C = p_C + R_C p_CJ on its child, and the
+// joint frames' axes U_k = R_P R_PJ e_k and W_k = R_C R_CJ e_k (k = 0: the axis a, 1 and 2: b1 and b2 normal to it).
+// Equalities (zero when the joint holds; the paper's bilateral constraints, its eq. 1 with joints):
+//   linear rows    (x_C - x_P) . U_k   for k = 0, 1, 2 (revolute, continuous, fixed) or k = 1, 2 (prismatic)
+//   angular rows   U_0 . W_1 and U_0 . W_2 (the axes stay parallel), and for prismatic and fixed also U_1 . W_2
+//                  (no turning about the axis)
+// Positions: revolute and continuous theta = offset + atan2(U_2 . W_1, U_1 . W_1) (rad), prismatic (x_C - x_P) . U_0
+// (m), fixed 0.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "implicit_sim/core/model/model.h"
+#include "implicit_sim/core/model/state.h"
+
+namespace implicit_sim {
+
+// The gradient of a scalar joint function with respect to small motions of the parent (P) and the child (C): a
+// translation dp (m) and a rotation dtheta (rad, world frame, R -> Exp(dtheta) R) of each. Read as a generalized
+// force, it is the force (dp) and the torque about the centre of mass (dth) that a unit multiplier of the function
+// exerts on each body (world frame).
+struct JointGradient {
+  Vec3 dp_P = Vec3::Zero(), dth_P = Vec3::Zero(), dp_C = Vec3::Zero(), dth_C = Vec3::Zero();
+  // The function's rate for the bodies' velocities (world frame, at the centres of mass).
+  double Rate(const Vec3& v_P, const Vec3& w_P, const Vec3& v_C, const Vec3& w_C) const {
+    return dp_P.dot(v_P) + dth_P.dot(w_P) + dp_C.dot(v_C) + dth_C.dot(w_C);
+  }
+};
+
+// Equality i in [0, joint.num_equalities()) at the body poses X_WP (the parent; the world: identity) and X_WC, with
+// its gradient if `gradient` is not null. Linear rows in m, angular rows dimensionless (the sine of an angle).
+double JointEquality(const Joint& joint, int i, const Pose& X_WP, const Pose& X_WC, JointGradient* gradient);
+bool IsLinearEquality(const Joint& joint, int i);
+// The joint position (rad or m; 0 for a fixed joint) and its gradient.
+double JointPosition(const Joint& joint, const Pose& X_WP, const Pose& X_WC, JointGradient* gradient);
+
+Pose ParentPose(const Model& model, const State& state, const Joint& joint);  // identity for the world
+double JointPosition(const Model& model, const State& state, int joint);      // rad or m
+double JointVelocity(const Model& model, const State& state, int joint);      // rad/s or m/s
+// The largest violation of any joint equality in `state`: of the linear rows (m) and of the angular rows (rad).
+void JointDrift(const Model& model, const State& state, double* position_m, double* angle_rad);
+
+// A commanded effort (N m or N) clamped to +-joint.effort_limit when that is > 0.
+double ClampJointEffort(const Joint& joint, double commanded);
+
+// Adds the wrench of joint efforts (one per model joint: N m for revolute and continuous joints, N for prismatic;
+// fixed joints take none) at the configuration of `state` to wrench_W (6 values per moving body slot: force, torque;
+// world frame, at the centre of mass). Each effort is clamped by ClampJointEffort. Throws
+// std::invalid_argument (and adds nothing) if the sizes do not match or an effort is not finite.
+void AddJointEffortWrench(const Model& model, const State& state, const Eigen::VectorXd& efforts,
+                          Eigen::VectorXd* wrench_W);
+
+}  // namespace implicit_sim

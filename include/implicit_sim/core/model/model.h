@@ -1,0 +1,148 @@
+// The model: everything about a scene that does not change while it runs. Const after loading.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "implicit_sim/core/geometry/broad_phase.h"
+#include "implicit_sim/core/geometry/shapes.h"
+
+namespace implicit_sim {
+
+// Friction of one contact (paper eq. 4-5): mu (-), e_t and e_o (-), e_r (m: largest torsional moment e_r mu f_n).
+struct FrictionParams {
+  double mu = 0.5;
+  double e_t = 1.0;
+  double e_o = 1.0;
+  double e_r = 0.1;
+};
+
+struct Body {
+  std::string name;             // the URDF link name
+  bool is_fixed = false;        // fixed to the world (pose X_WB0 forever)
+  double mass = 0.0;            // kg (moving bodies)
+  Mat3 I_B = Mat3::Zero();      // rotational inertia about the centre of mass, body frame (kg m^2)
+  ConvexShape shape;            // in the body frame B (origin at the centre of mass)
+  Pose X_BL = Pose::Identity(); // pose of the URDF link frame L in B (non-identity when <inertial> has an origin)
+  Pose X_WB0 = Pose::Identity();  // initial pose of B in the world W
+  Vec3 v_WB0 = Vec3::Zero();    // initial linear velocity of the centre of mass, world frame (m/s)
+  Vec3 w_WB0 = Vec3::Zero();    // initial angular velocity, world frame (rad/s)
+  Vec3 f_applied_W = Vec3::Zero();  // constant applied force at the centre of mass, world frame (N)
+  Vec3 tau_applied_W = Vec3::Zero();  // constant applied torque, world frame (N m)
+  // Locked degrees of freedom in world axes: vx vy vz wx wy wz; a locked velocity stays 0.
+  std::array<bool, 6> locked{{false, false, false, false, false, false}};
+};
+
+// A URDF joint between two bodies: a bilateral constraint inside the step NCP (joints.h has the rows). The joint frame
+// J is the URDF joint frame: the child's link frame coincides with it at joint position 0.
+enum class JointType { kFixed, kRevolute, kContinuous, kPrismatic };
+const char* JointTypeName(JointType type);  // "fixed", "revolute", "continuous", "prismatic"
+
+struct Joint {
+  std::string name;
+  JointType type = JointType::kRevolute;
+  int parent = -1;             // body index of the parent link; -1: the world
+  int child = -1;              // body index of the child link (always a moving body)
+  Vec3 p_PJ = Vec3::Zero();    // joint origin in the parent's body frame (world frame for the world) (m)
+  Vec3 p_CJ = Vec3::Zero();    // joint origin in the child's body frame (m)
+  // Columns: the unit axis a, then b1 and b2 = a x b1 normal to it; R_PJ in the parent's body frame, R_CJ in the
+  // child's at joint position 0. For a limited revolute joint, b1 and b2 of R_PJ are turned about a by `offset`, so
+  // that the angle is measured from the middle of its range (any range shorter than 2 pi then works).
+  Mat3 R_PJ = Mat3::Identity();
+  Mat3 R_CJ = Mat3::Identity();
+  double offset = 0.0;         // rad, see R_PJ
+  bool limited = false;        // revolute and prismatic joints (URDF <limit lower upper>)
+  double lower = 0.0, upper = 0.0;  // rad (revolute) or m (prismatic)
+  double effort_limit = 0.0;   // commanded efforts are clamped to +-effort_limit (N m or N); 0: no clamp
+  double damping = 0.0;        // viscous, N m s/rad or N s/m (URDF <dynamics damping>)
+  double friction = 0.0;       // Coulomb, N m or N (URDF <dynamics friction>)
+  double initial_position = 0.0;  // rad or m
+  double initial_velocity = 0.0;  // rad/s or m/s
+  double applied_effort = 0.0;    // constant effort (N m or N), within +-effort_limit when that is > 0
+
+  bool has_coordinate() const { return type != JointType::kFixed; }
+  int num_equalities() const { return type == JointType::kFixed ? 6 : 5; }
+  // Unknowns of the joint in the step NCP: one multiplier per equality, two limit multipliers when limited, and the
+  // friction fraction and slip speed when friction > 0.
+  int size() const { return num_equalities() + (limited ? 2 : 0) + (friction > 0.0 ? 2 : 0); }
+};
+
+// A candidate contact between body1 and body2 (indices into Model::bodies). body1 is always a moving body.
+struct ContactPair {
+  int body1 = -1;
+  int body2 = -1;
+  FrictionParams friction;
+};
+
+struct Model {
+  std::vector<Body> bodies;
+  std::vector<ContactPair> pairs;
+  std::vector<Joint> joints;       // parents before children
+  std::vector<int> moving_bodies;  // indices of the moving bodies, in URDF order: velocity slot k -> body index
+  std::vector<int> velocity_slot;  // body index -> velocity slot, -1 for fixed bodies
+  // Pairs are listed by (lower body index i, higher index j), i ascending then j ascending; the pairs whose lower
+  // index is i are pairs[pairs_of_lower[i] .. pairs_of_lower[i + 1]). Size bodies + 1.
+  std::vector<int> pairs_of_lower;
+  Vec3 gravity_W = Vec3(0.0, 0.0, -9.81);  // m/s^2
+  std::string scene_name;
+
+  int num_moving() const { return static_cast<int>(moving_bodies.size()); }
+  // Sizes of State::q (position and unit quaternion per moving body) and State::v (linear and angular velocity).
+  static constexpr int kBodyNq = 7;
+  static constexpr int kBodyNv = 6;
+  int nq() const { return kBodyNq * num_moving(); }
+  int nv() const { return kBodyNv * num_moving(); }
+  // Where moving body slot k starts in q (p_WB at +0, the quaternion w, x, y, z at +3) and in v (v_WB at +0, w_WB
+  // at +3); the same offsets index 6-per-body wrench vectors.
+  static int q_offset(int slot) { return kBodyNq * slot; }
+  static int v_offset(int slot) { return kBodyNv * slot; }
+  int FindBody(const std::string& name) const;  // -1 if absent
+  int FindJoint(const std::string& name) const;  // -1 if absent
+  bool Joined(int i, int j) const;  // whether a joint joins bodies i and j directly
+  // The pair of bodies i and j (either order), -1 if they form none (both fixed, or one has no shape).
+  int PairIndex(int i, int j) const;
+  std::string PairName(int pair) const;  // "<link1>-<link2>", body1 first
+  // Builds moving_bodies, velocity_slot and one pair for every two bodies with shapes of which at least one moves and
+  // that no joint joins directly (adjacent links touch at their joint by design, as in MoveIt's default ACM).
+  // `pair_friction(i, j)` gives the friction of the pair; bodies must already be filled in.
+  template <typename FrictionOf>
+  void Finalize(FrictionOf pair_friction);
+  // A force scale (N) for the solver's row scaling: over the moving bodies, the largest of |m g + f_applied| and
+  // m max(|g|, 1 m/s^2); at least 1e-3 N.
+  double ForceScale() const;
+};
+
+// The broad phase over the model's bodies; its candidates are model pair indices. It refers to the model, which must
+// outlive it.
+BroadPhase MakeBroadPhase(const Model& model);
+
+template <typename FrictionOf>
+void Model::Finalize(FrictionOf pair_friction) {
+  moving_bodies.clear();
+  velocity_slot.assign(bodies.size(), -1);
+  for (int i = 0; i < static_cast<int>(bodies.size()); ++i) {
+    if (!bodies[i].is_fixed) {
+      velocity_slot[i] = static_cast<int>(moving_bodies.size());
+      moving_bodies.push_back(i);
+    }
+  }
+  pairs.clear();
+  pairs_of_lower.assign(bodies.size() + 1, 0);
+  for (int i = 0; i < static_cast<int>(bodies.size()); ++i) {
+    pairs_of_lower[i] = static_cast<int>(pairs.size());
+    for (int j = i + 1; j < static_cast<int>(bodies.size()); ++j) {
+      if (bodies[i].is_fixed && bodies[j].is_fixed) continue;
+      if (bodies[i].shape.inequalities.empty() || bodies[j].shape.inequalities.empty()) continue;
+      if (Joined(i, j)) continue;
+      ContactPair pair;
+      pair.body1 = bodies[i].is_fixed ? j : i;  // body1 moves
+      pair.body2 = bodies[i].is_fixed ? i : j;
+      pair.friction = pair_friction(pair.body1, pair.body2);
+      pairs.push_back(pair);
+    }
+  }
+  pairs_of_lower[bodies.size()] = static_cast<int>(pairs.size());
+}
+
+}  // namespace implicit_sim

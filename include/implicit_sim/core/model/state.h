@@ -1,0 +1,23 @@
+// The state of a simulation: time, configuration and velocity of the moving bodies. Nothing else.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "implicit_sim/core/model/model.h"
+
+namespace implicit_sim {
+
+struct State {
+  double t = 0.0;          // s
+  Eigen::VectorXd q;       // per moving body: p_WB (3, m), then the unit quaternion of R_WB (w, x, y, z)
+  Eigen::VectorXd v;       // per moving body: v_WB (3, m/s), then w_WB (3, rad/s), world frame
+
+  static State Initial(const Model& model);
+  Pose X_WB(const Model& model, int body) const;  // fixed bodies: their constant pose
+  Vec3 v_WB(int slot) const { return v.segment<3>(6 * slot); }
+  Vec3 w_WB(int slot) const { return v.segment<3>(6 * slot + 3); }
+};
+
+double KineticEnergy(const Model& model, const State& state);  // J
+
+}  // namespace implicit_sim

@@ -1,0 +1,96 @@
+// Data(model): everything a step derives from the Model and the State, and the solver workspace, allocated once
+// (MuJoCo's mjData, Pinocchio's Data). A Data belongs to the Model it was built from: Step checks that, and the Model
+// must outlive it. Also the contact results of a step and the warm start (save, restore, clear).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "implicit_sim/core/geometry/broad_phase.h"
+#include "implicit_sim/core/model/model.h"
+#include "implicit_sim/core/model/state.h"
+#include "implicit_sim/core/ncp/semismooth_newton.h"
+#include "implicit_sim/core/step/step_problem.h"
+
+namespace implicit_sim {
+
+// Contact quantities at the end of a step, derived from a solution z.
+struct ContactResult {
+  int pair = -1;                                     // the model pair
+  Vec3 p_WA1 = Vec3::Zero(), p_WA2 = Vec3::Zero();  // closest points (m)
+  Vec3 n_W = Vec3::UnitZ();                          // unit normal from body 2 towards body 1
+  double gap = 0.0;                                  // signed distance d (m)
+  double normal_force = 0.0;                         // N
+  Vec3 friction_force_W = Vec3::Zero();              // tangential force on body 1 (N)
+  double torsional_moment = 0.0;                     // about n (N m)
+  double slip_speed = 0.0;                           // tangential relative speed at the contact (m/s)
+};
+
+class Data {
+ public:
+  static constexpr int kMaxSubstepDepth = 4;  // a failed step is split down to h / 16
+  static constexpr int kMaxBroadPhaseRounds = 4;  // re-solves of one step after its end-of-step check added pairs
+  // kAuto: every pair in every NCP (a dense solve) for models with at most kAllPairsLimit pairs, where that is
+  // cheaper than the bookkeeping and every pair's exact gap is reported at every step; the broad phase with the
+  // sparse solve above that.
+  enum class PairSelection { kAuto, kAllPairs, kBroadPhase };
+  static constexpr int kAllPairsLimit = 16;
+  // NCPs with more unknowns than this are solved in sparse mode (see semismooth_newton.h) even with every pair in
+  // them: a 1000-gon disc has one pair with about 1000 unknowns, whose dense LU took seconds per step.
+  static constexpr int kDenseSizeLimit = 200;
+  explicit Data(const Model& model, PairSelection selection = PairSelection::kAuto);
+  // Whether this Data was built from `model` (the very object: the step problem and the broad phase refer to it).
+  bool BelongsTo(const Model& model) const { return &model == model_; }
+  // Lays the problem and the solution vectors out for `pairs` (model pair indices, ascending), carrying z_old over
+  // into z_remap (the blocks of new pairs are zero and listed in new_blocks).
+  void LayOut(const std::vector<int>& pairs, const Eigen::VectorXd* z_old);
+
+ private:
+  const Model* model_;
+
+ public:
+  // --- the step problem and its solvers ---
+  const bool broad_phase;
+  StepProblem problem;
+  const bool sparse;  // broad_phase or more than kDenseSizeLimit unknowns
+  SemismoothNewton solver;
+  BroadPhase broad;
+  // --- the warm start (see WarmStart) ---
+  Eigen::VectorXd z;            // the last solution (warm start of the next step)
+  bool has_warm_start = false;
+  // --- workspace of the current step and its retry ladder ---
+  Eigen::VectorXd z_start;      // the initial guess of the current solve
+  Eigen::VectorXd z_best;       // the best iterate of the ladder so far
+  std::vector<Vec3> axes_warm_failed;
+  std::vector<Eigen::VectorXd> z_backup;  // per sub-step depth
+  std::vector<std::vector<int>> pairs_backup;  // per sub-step depth: the pairs z_backup is laid out for
+  State state_backup;  // the state before the step, restored when the step is not accepted
+  // --- broad-phase workspace ---
+  std::vector<int> pairs, candidates, forced_pairs, merged, new_blocks;
+  std::vector<Pose> X_WB;
+  std::vector<double> inflation;
+  Eigen::VectorXd z_remap;
+  // --- outputs: the contact results of the last step, one per pair in its NCP (contacts[i].pair is the model
+  // pair). With every pair in the NCP, contacts[c] belongs to model pair c. ---
+  std::vector<ContactResult> contacts;
+};
+
+// Everything a step reads besides the State: whether there is a warm start, the previous solution z (velocities,
+// closest points, normals, multipliers), the pairs z is laid out for and the friction tangent axes. A step is a
+// function of (State, WarmStart) alone (the sparse LU chooses its pivots afresh in every solve), so saving both and
+// restoring them continues a run bit-identically.
+struct WarmStart {
+  bool valid = false;
+  std::vector<int> pairs;  // model pair indices, ascending
+  Eigen::VectorXd z;
+  std::vector<Vec3> tangent_axes;
+};
+void SaveWarmStart(const Data& data, WarmStart* out);
+// Throws std::invalid_argument (and changes nothing) if `saved` was not taken from a Data of this model.
+void RestoreWarmStart(const Model& model, const WarmStart& saved, Data* data);
+// Forgets the warm start: the next step starts cold, exactly like the first step of a new Data (a reset).
+void ClearWarmStart(Data* data);
+
+}  // namespace implicit_sim

@@ -1,0 +1,244 @@
+// The mixed nonlinear complementarity problem of one geometrically implicit step (paper eq. 10-11 and Appendix
+// eq. 19-22), in the normal-distance form of DESIGN.md section 2, reformulated with the Fischer-Burmeister function.
+//
+// Unknowns z (everything at the END of the step):
+//   per moving body (slot k): nu_k = (v_WB, w_WB), 6 values, at z[6k].
+//   per model joint j, a block at joint_offset(j) (see AddJointRows in step_joints.cpp and joints.h):
+//     lambda (num_equalities)  multipliers of the joint equalities (N for linear rows, N m for angular rows)
+//     l_lo, l_hi              limit multipliers (N m or N), if the joint is limited
+//     s_f, sigma_f            friction as a fraction of the Coulomb limit, and the joint's slip speed, if friction > 0
+//   per contact pair c, a block at offset(c):
+//     a1 (3), a2 (3)     closest points on body 1 and body 2, world frame (m)
+//     n (3)              unit normal from body 2 towards body 1
+//     d                  signed distance along n: a1 - a2 = d n (m); d >= 0 means no interpenetration
+//     s_t, s_o, s_r      friction as fractions of the friction ellipsoid: force along t = mu e_t ln s_t (N), along o
+//                        = mu e_o ln s_o (N), torsional moment about n = mu e_r ln s_r (N m)
+//     alpha (K1)         multipliers of body 1's inequalities: -n = sum alpha_i grad f_i(a1)
+//     beta (K2)          multipliers of body 2's inequalities:  n = sum beta_j grad g_j(a2)
+//     ln                 normal force (N)
+//     sigma              slip multiplier (m/s): the generalized slip speed at a sliding contact
+// Equations (rows), scaled so that each is O(1) with the force scale Fs of the model:
+//   body rows     m (v - v0)/h - f_app - sum W lambda = 0 and (I_W(R1) w - I_W(R0) w0)/h - tau_app - sum ... = 0,
+//                 divided by Fs (paper eq. 1 in impulse form / h; the angular row in momentum form, see AddBodyRows)
+//   pair rows     a1 - a2 - d n = 0;  n - sum beta grad g = 0;  -n - sum alpha grad f = 0;  (n.n - 1)/2 = 0
+//                 friction (paper eq. 10 with its typo fixed, divided by mu e ln so that it stays regular at ln = 0):
+//                   e_t (t.v_rel) + s_t sigma = 0,  e_o (o.v_rel) + s_o sigma = 0,  e_r (n.w_rel) + s_r sigma = 0
+//                 complementarity (paper eq. 11 and 19), as FB(a, b) = a + b - sqrt(a^2 + b^2) = 0:
+//                   alpha_i _|_ -f_i(a1),  beta_j _|_ -g_j(a2),  ln / Fs _|_ d,  sigma _|_ zeta,
+//                   zeta = 1 - s_t^2 - s_o^2 - s_r^2 (the friction ellipsoid of eq. 5 divided by (mu ln)^2)
+// Why the normalized friction unknowns (an improvement on the paper's p_t, p_o, p_r): with forces as unknowns a
+// separated contact (ln = 0) leaves sigma and the friction forces undetermined and Newton converges only linearly
+// there (DESIGN.md pitfall 2). With fractions, sigma equals the generalized slip speed even at a separated
+// contact and every friction row keeps a regular Jacobian; for ln > 0 the two forms are equivalent.
+// Body 1 and body 2 are at their end-of-step poses p = p0 + h v, R = Exp(h w) R0 (paper eq. 2), so every
+// geometric quantity depends on nu: that is what makes the step geometrically implicit.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include "implicit_sim/core/model/joints.h"
+#include "implicit_sim/core/model/model.h"
+#include "implicit_sim/core/model/state.h"
+
+namespace implicit_sim {
+
+// Indices inside one pair block (see above).
+namespace pair_index {
+constexpr int kA1 = 0, kA2 = 3, kN = 6, kD = 9, kSt = 10, kSo = 11, kSr = 12, kAlpha = 13;
+}
+
+struct PairBlock {
+  int pair = -1;    // the model pair
+  int offset = 0;   // index of the block in z and in the rows
+  int k1 = 0;       // number of inequalities of body 1
+  int k2 = 0;       // number of inequalities of body 2
+  int size() const { return 13 + k1 + k2 + 2; }
+  int beta() const { return offset + pair_index::kAlpha + k1; }
+  int ln() const { return offset + pair_index::kAlpha + k1 + k2; }
+  int sigma() const { return ln() + 1; }
+};
+
+struct ContactResult;  // step/data.h
+
+// The Jacobian in compressed sparse columns. Its pattern is recorded on the first evaluation after the active pairs
+// change; later evaluations only add values through the recorded slots (no allocation).
+struct SparseJacobian {
+  Eigen::SparseMatrix<double> matrix;
+  int pattern_version = -1;       // StepProblem::pattern_version() the pattern belongs to
+  std::vector<Eigen::Triplet<double>> recorded;  // the entries as emitted, while recording
+  std::vector<int> slot;          // per emitted entry: its index in matrix.valuePtr()
+  int cursor = 0;
+  bool recording = false;
+};
+
+class StepProblem {
+ public:
+  // With all_pairs every model pair is in the problem; otherwise none until SetActivePairs.
+  explicit StepProblem(const Model& model, bool all_pairs = true);
+
+  int size() const { return size_; }
+  // Unknowns before the first pair block: the body velocities and the joint blocks.
+  int pair_base() const { return pair_base_; }
+  int joint_offset(int joint) const { return joint_offset_[joint]; }
+  const std::vector<PairBlock>& blocks() const { return blocks_; }
+  // The model pairs in the problem, in block order (ascending).
+  void ActivePairs(std::vector<int>* pairs) const;
+  // Replaces the pairs in the problem by `pairs` (model pair indices, ascending). If z_old is given (laid out for
+  // the previous pairs), *z_new receives its body part and the blocks of the pairs that stay, with their tangent axes;
+  // the blocks of new pairs are zero and their indices (into blocks()) are listed in *new_blocks.
+  void SetActivePairs(const std::vector<int>& pairs, const Eigen::VectorXd* z_old, Eigen::VectorXd* z_new,
+                      std::vector<int>* new_blocks);
+  // Changes whenever the layout (and so the sparsity pattern of the Jacobian) changes.
+  int pattern_version() const { return pattern_version_; }
+
+  // Stores the start-of-step quantities (poses, velocities, world inertia) and the external wrenches
+  // of the step: 6 values per moving body slot (force N, torque N m; world frame, at the centre of mass), or null.
+  void BeginStep(const Model& model, const State& start, double h, const Eigen::VectorXd* external_wrench_W);
+
+  // The tangent basis (t, o) of a pair is built from n and a world reference axis fixed for the whole step
+  // (DESIGN.md pitfall 3). UpdateTangentAxes keeps each pair's axis while |axis . n| < 0.9 for the normal in *z and
+  // otherwise switches to the world axis least aligned with n, re-expressing s_t, s_o of *z in the new basis so that
+  // a warm start stays a warm start. ResetTangentAxes picks the least aligned axis for every pair.
+  void UpdateTangentAxes(Eigen::VectorXd* z);
+  void ResetTangentAxes(const Eigen::VectorXd& z);
+  void ResetTangentAxis(int block, const Eigen::VectorXd& z);
+  const std::vector<Vec3>& tangent_axes() const { return tangent_axis_; }
+  void set_tangent_axes(const std::vector<Vec3>& axes) { tangent_axis_ = axes; }
+
+  // Warm-start predictor: translates the closest points of *z with their bodies over the step (a += h v0; not as
+  // material points: a rolling sphere's contact point moves with its centre) and sets d = n . (a1 - a2), so that a
+  // fast body's warm start stays near the new solution instead of a spurious one (the far sides of two spheres also
+  // satisfy the normal cones).
+  void PredictClosestPoints(Eigen::VectorXd* z) const;
+
+  // Cold-start friction guess from the start-of-step relative velocity at the points in *z: sigma = the generalized
+  // slip speed and s = the sliding direction (sigma = 0, s = 0 is a saddle of the merit function for a sliding or
+  // separated contact).
+  void SeedFriction(Eigen::VectorXd* z) const;
+  void SeedFriction(int block, Eigen::VectorXd* z) const;
+  // Cold-start joint unknowns: zero multipliers; joint friction seeded from the start-of-step joint velocity like
+  // SeedFriction.
+  void SeedJoints(Eigen::VectorXd* z) const;
+
+  // The FB-reformulated residual Phi(z) and, if J is not null, its exact generalized Jacobian (n x n), dense or sparse.
+  void Evaluate(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J);
+  void EvaluateSparse(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, SparseJacobian* J);
+  // Adds delta (>= 0) to the Jacobian's diagonal entries of the friction rows and (delta / Fs) of the normal-force
+  // rows, never to Phi: a proximal regularization of the Newton direction for the sparse LU (see semismooth_newton.h).
+  void set_jacobian_regularization(double delta) { regularization_ = delta; }
+  // Friction rows with sigma + max(d, 0) / h in place of sigma (see AddPair); off by default.
+  void set_regular_separated_friction(bool on) { regular_separated_friction_ = on; }
+
+  // The largest |min(a, b)| over all complementarity pairs (in their scaled units).
+  double ComplementarityError(const Eigen::VectorXd& z);
+  // The largest |E_i(z)| over the equations and the largest |min(a_i, b_i(z))| over the pairs, from the raw rows.
+  void RawResiduals(const Eigen::VectorXd& z, double* equations, double* complementarity);
+
+  // The contact quantities of every pair in the problem for a solution z (one entry per block, in block order).
+  void Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>* out);
+
+  // The joint limit effort l_lo - l_hi of joint j in a solution z (N m or N, positive towards increasing position; 0
+  // for a joint without limits): the step-average effort the limit exerted.
+  double JointLimitEffort(const Eigen::VectorXd& z, int joint) const;
+
+  // End-of-step pose of body b for velocities in z.
+  Pose EndPose(int body, const Eigen::VectorXd& z) const;
+
+  double force_scale() const { return force_scale_; }
+  // Smoothing mu >= 0 of every Fischer-Burmeister function (0: the exact problem). See FischerBurmeister.
+  void set_smoothing(double mu) { smoothing_ = mu; }
+  // Raw mode: each complementarity row returns b(z), the function side of its pair (-f_i(a1), -g_j(a2), d, zeta),
+  // instead of FB(a, b). The variable side a is the unknown with the row's own index (scaled by 1/Fs for the
+  // normal force). The Ipopt formulation of the step (ipopt_ncp.h) uses it.
+  void set_raw_complementarity(bool raw) { raw_ = raw; }
+  // Whether row i is a complementarity row, and the scale of its variable side a = scale * z[i].
+  bool IsComplementarityRow(int row, double* scale) const;
+
+ private:
+  struct BodyStep {   // per body, for the current step
+    Vec3 p0 = Vec3::Zero();
+    Mat3 R0 = Mat3::Identity();
+    Vec3 v0 = Vec3::Zero(), w0 = Vec3::Zero();
+    Mat3 I_W0 = Mat3::Zero();       // world inertia at the start of the step (kg m^2)
+  };
+  struct BodyEnd {    // per body, for the current iterate
+    Vec3 p = Vec3::Zero();
+    Mat3 R = Mat3::Identity();
+    Vec3 v = Vec3::Zero(), w = Vec3::Zero();
+    Mat3 dtheta_dw = Mat3::Zero();  // h J_l(h w): rotation increment per change of w
+    int col = -1;                   // column of v in z (w at col + 3), -1 when fixed
+  };
+  struct Eval {       // one inequality evaluated at a world point
+    double f;
+    Vec3 g;           // world gradient
+    Mat3 H;           // world Hessian
+  };
+
+  void UpdateBodies(const Eigen::VectorXd& z);
+  Eval EvaluateInequality(int body, int k, const Vec3& p_W) const;
+  void EvaluateAll(const Eigen::VectorXd& z, Eigen::VectorXd* Phi);
+  void AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi);
+  void AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi);
+  void AddJointRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi);
+  // Joint helpers (step_joints.cpp): the start-of-step gradients, the Jacobian of an end-of-step joint function, of a
+  // joint rate, and a generalized joint force on the body rows.
+  void BeginJoints();
+  void AddEndGradientRow(int row, const JointGradient& g, const BodyEnd& eP, const BodyEnd& eC,
+                         double scale);
+  void AddRateRow(int row, const JointGradient& g, const BodyEnd& eP, const BodyEnd& eC, double scale);
+  void AddJointForce(const JointGradient& g, double force, int col, double dforce_dcol, const BodyEnd& eP,
+                     const BodyEnd& eC, Eigen::VectorXd* Phi);
+  void AddJointLimitRows(const Joint& joint, int col, const Eigen::VectorXd& z, const BodyEnd& eP, const BodyEnd& eC,
+                         const JointGradient& G_q, Eigen::VectorXd* Phi);
+  void AddJointFrictionRows(const Joint& joint, int col, const Eigen::VectorXd& z, const BodyEnd& eP,
+                            const BodyEnd& eC, const JointGradient& G_q, Eigen::VectorXd* Phi);
+  void AddJointDamping(const Joint& joint, const BodyEnd& eP, const BodyEnd& eC, const JointGradient& G_q,
+                       Eigen::VectorXd* Phi);
+  const BodyEnd& ParentEnd(const Joint& joint) const { return joint.parent < 0 ? world_end_ : end_[joint.parent]; }
+  // Adds `block` to J at (row, col), dense or sparse (every call emits the same entries for the same layout, so that
+  // the sparse pattern recorded once stays valid). Rows of locked velocities become "velocity = 0".
+  template <typename Block>
+  void AddJ(int row, int col, const Block& block);
+  void AddJ(int row, int col, double value);
+  struct ContactWrench {  // the contact force F on body 1 and the torsional moment lr about n, with derivatives
+    Vec3 n, F, dF_dln, dF_dst, dF_dso;
+    Mat3 dF_dn;
+    double lr, dlr_dln, dlr_dsr;
+  };
+  void AddContactWrench(int c, int body, double sign, const Vec3& r, const ContactWrench& wrench,
+                        Eigen::VectorXd* Phi);
+
+  const Model& model_;
+  std::vector<PairBlock> blocks_;
+  std::vector<BodyStep> start_;
+  std::vector<BodyEnd> end_;
+  std::vector<Vec3> tangent_axis_;   // per pair
+  std::vector<int> joint_offset_;    // per joint
+  int pair_base_ = 0;
+  // Per joint, at the start of the step: the gradients of the equalities and of the position. The joint forces act
+  // along them over the step while the equalities hold at its end (the SHAKE discretization; see AddJointRows).
+  std::vector<std::array<JointGradient, 6>> joint_equality_start_;
+  std::vector<JointGradient> joint_position_start_;
+  BodyEnd world_end_;                // the world as a parent: identity pose, no velocity unknowns
+  Eigen::VectorXd external_wrench_W_;  // per moving body slot: force, torque (world, at the centre of mass)
+  int size_ = 0;
+  double h_ = 0.0;
+  double force_scale_ = 1.0;
+  double smoothing_ = 0.0;
+  bool raw_ = false;
+  Eigen::VectorXd raw_scratch_;  // the raw rows, for RawResiduals
+  std::vector<char> complementarity_kind_;  // per row: 0 equation, 1 complementarity, 2 normal-force complementarity
+  std::vector<char> locked_row_;             // per body row: the velocity is locked
+  double regularization_ = 0.0;
+  bool regular_separated_friction_ = false;
+  int pattern_version_ = 0;
+  // Where Evaluate writes the Jacobian (at most one non-null; both null: no Jacobian).
+  Eigen::MatrixXd* J_dense_ = nullptr;
+  SparseJacobian* J_sparse_ = nullptr;
+};
+
+}  // namespace implicit_sim

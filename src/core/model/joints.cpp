@@ -1,0 +1,144 @@
+#include "implicit_sim/core/model/joints.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace implicit_sim {
+namespace {
+
+// (x_C - x_P) . U with U = R_P R_PJ e_k.
+double LinearRow(const Joint& joint, int k, const Pose& X_WP, const Pose& X_WC, JointGradient* g) {
+  const Vec3 U = X_WP.linear() * joint.R_PJ.col(k);
+  const Vec3 r_C = X_WC.linear() * joint.p_CJ;  // joint origin from the child's centre of mass
+  const Vec3 x_C = X_WC.translation() + r_C;
+  const Vec3 x_P = X_WP * joint.p_PJ;
+  if (g) {
+    g->dp_C = U;
+    g->dth_C = r_C.cross(U);
+    g->dp_P = -U;
+    g->dth_P = U.cross(x_C - X_WP.translation());  // from x_P and from U turning with the parent
+  }
+  return (x_C - x_P).dot(U);
+}
+
+// U_i . W_j with U_i = R_P R_PJ e_i, W_j = R_C R_CJ e_j.
+double AngularRow(const Joint& joint, int i, int j, const Pose& X_WP, const Pose& X_WC, JointGradient* g) {
+  const Vec3 U = X_WP.linear() * joint.R_PJ.col(i);
+  const Vec3 W = X_WC.linear() * joint.R_CJ.col(j);
+  if (g) {
+    g->dp_P.setZero();
+    g->dp_C.setZero();
+    g->dth_P = U.cross(W);
+    g->dth_C = W.cross(U);
+  }
+  return U.dot(W);
+}
+
+}  // namespace
+
+bool IsLinearEquality(const Joint& joint, int i) { return i < (joint.type == JointType::kPrismatic ? 2 : 3); }
+
+double JointEquality(const Joint& joint, int i, const Pose& X_WP, const Pose& X_WC, JointGradient* gradient) {
+  const bool prismatic = joint.type == JointType::kPrismatic;
+  if (IsLinearEquality(joint, i)) return LinearRow(joint, prismatic ? i + 1 : i, X_WP, X_WC, gradient);
+  const int k = i - (prismatic ? 2 : 3);  // 0: (a, b1), 1: (a, b2), 2: (b1, b2)
+  return AngularRow(joint, k == 2 ? 1 : 0, k == 2 ? 2 : k + 1, X_WP, X_WC, gradient);
+}
+
+double JointPosition(const Joint& joint, const Pose& X_WP, const Pose& X_WC, JointGradient* gradient) {
+  switch (joint.type) {
+    case JointType::kFixed:
+      if (gradient) *gradient = JointGradient();
+      return 0.0;
+    case JointType::kPrismatic:
+      return LinearRow(joint, 0, X_WP, X_WC, gradient);
+    case JointType::kRevolute:
+    case JointType::kContinuous:
+      break;
+  }
+  // theta = offset + atan2(y, x), x = U_1 . W_1, y = U_2 . W_1; d theta = (x dy - y dx) / (x^2 + y^2) with
+  // dx/dtheta_C = W_1 x U_1 and dy/dtheta_C = W_1 x U_2 (and the opposite for the parent).
+  const Vec3 U1 = X_WP.linear() * joint.R_PJ.col(1), U2 = X_WP.linear() * joint.R_PJ.col(2);
+  const Vec3 W1 = X_WC.linear() * joint.R_CJ.col(1);
+  const double x = U1.dot(W1), y = U2.dot(W1);
+  if (gradient) {
+    const Vec3 c = (x * W1.cross(U2) - y * W1.cross(U1)) / std::max(x * x + y * y, 1e-300);
+    gradient->dp_P.setZero();
+    gradient->dp_C.setZero();
+    gradient->dth_C = c;
+    gradient->dth_P = -c;
+  }
+  return joint.offset + std::atan2(y, x);
+}
+
+Pose ParentPose(const Model& model, const State& state, const Joint& joint) {
+  return joint.parent < 0 ? Pose::Identity() : state.X_WB(model, joint.parent);
+}
+
+namespace {
+struct BodyVelocity {
+  Vec3 v = Vec3::Zero(), w = Vec3::Zero();
+};
+BodyVelocity VelocityOf(const Model& model, const State& state, int body) {
+  const int k = body < 0 ? -1 : model.velocity_slot[body];
+  if (k < 0) return {};
+  return {state.v_WB(k), state.w_WB(k)};
+}
+}  // namespace
+
+double JointPosition(const Model& model, const State& state, int j) {
+  const Joint& joint = model.joints[j];
+  return JointPosition(joint, ParentPose(model, state, joint), state.X_WB(model, joint.child), nullptr);
+}
+
+double JointVelocity(const Model& model, const State& state, int j) {
+  const Joint& joint = model.joints[j];
+  JointGradient g;
+  JointPosition(joint, ParentPose(model, state, joint), state.X_WB(model, joint.child), &g);
+  const BodyVelocity P = VelocityOf(model, state, joint.parent), C = VelocityOf(model, state, joint.child);
+  return g.Rate(P.v, P.w, C.v, C.w);
+}
+
+void JointDrift(const Model& model, const State& state, double* position_m, double* angle_rad) {
+  *position_m = *angle_rad = 0.0;
+  for (const Joint& joint : model.joints) {
+    const Pose X_WP = ParentPose(model, state, joint), X_WC = state.X_WB(model, joint.child);
+    for (int i = 0; i < joint.num_equalities(); ++i) {
+      const double error = std::abs(JointEquality(joint, i, X_WP, X_WC, nullptr));
+      double& worst = IsLinearEquality(joint, i) ? *position_m : *angle_rad;
+      worst = std::max(worst, IsLinearEquality(joint, i) ? error : std::asin(std::min(error, 1.0)));
+    }
+  }
+}
+
+double ClampJointEffort(const Joint& joint, double commanded) {
+  const double limit = joint.effort_limit > 0.0 ? joint.effort_limit : INFINITY;
+  return std::clamp(commanded, -limit, limit);
+}
+
+void AddJointEffortWrench(const Model& model, const State& state, const Eigen::VectorXd& efforts,
+                          Eigen::VectorXd* wrench_W) {
+  if (efforts.size() != static_cast<int>(model.joints.size()) || wrench_W->size() != 6 * model.num_moving()) {
+    throw std::invalid_argument("joint efforts: expected " + std::to_string(model.joints.size()) +
+                                " efforts and a wrench vector of " + std::to_string(6 * model.num_moving()));
+  }
+  if (!efforts.allFinite()) throw std::invalid_argument("joint efforts must be finite");
+  for (size_t j = 0; j < model.joints.size(); ++j) {
+    const Joint& joint = model.joints[j];
+    if (!joint.has_coordinate() || efforts[j] == 0.0) continue;
+    const double effort = ClampJointEffort(joint, efforts[j]);
+    JointGradient g;
+    JointPosition(joint, ParentPose(model, state, joint), state.X_WB(model, joint.child), &g);
+    for (const auto& [body, dp, dth] : {std::make_tuple(joint.parent, g.dp_P, g.dth_P),
+                                        std::make_tuple(joint.child, g.dp_C, g.dth_C)}) {
+      const int k = body < 0 ? -1 : model.velocity_slot[body];
+      if (k < 0) continue;
+      wrench_W->segment<3>(6 * k) += effort * dp;
+      wrench_W->segment<3>(6 * k + 3) += effort * dth;
+    }
+  }
+}
+
+}  // namespace implicit_sim

@@ -1,0 +1,72 @@
+#include "implicit_sim/core/step/step_health.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "implicit_sim/core/geometry/distance_oracle.h"
+#include "implicit_sim/core/base/format.h"
+#include "implicit_sim/core/geometry/support.h"
+
+namespace implicit_sim {
+namespace {
+
+// An upper bound on how deep the two bodies of `pair` overlap (m): 0 when their closest points are more than
+// `tolerance` apart; otherwise the crossing of the plane through the contact point on body 2's outward normal
+// (distance_oracle.h), which is positive whenever they overlap, since then no plane separates them. (The oracle
+// reports overlapping bodies at a distance of about its own tolerance, not 0.)
+double OverlapBound(const Model& model, const State& state, const ContactPair& pair, double tolerance) {
+  const Body& body1 = model.bodies[pair.body1];
+  const Body& body2 = model.bodies[pair.body2];
+  const Pose X_WB1 = state.X_WB(model, pair.body1), X_WB2 = state.X_WB(model, pair.body2);
+  const ClosestPointsResult cp = FindClosestPoints(body1.shape, X_WB1, body2.shape, X_WB2);
+  if (cp.solved && cp.distance > tolerance) return 0.0;
+  Vec3 normal_W = Vec3::UnitZ();
+  double grad_norm;
+  MostActiveInequality(body2.shape, X_WB2, cp.p_W2, &normal_W, &grad_norm);
+  // How far each body crosses the plane through p_W2 on normal_W (distance_oracle.h's PenetrationBound), with
+  // closed-form support points where the shape has them (the oracle's support value solves an NLP, about 10 ms,
+  // except for a single half-space).
+  const auto support = [](const ConvexShape& shape, const Pose& X_WB, const Vec3& u_W) {
+    Vec3 p_W;
+    return SupportPoint(shape, X_WB, u_W, &p_W) ? u_W.dot(p_W) : SupportValue(shape, X_WB, u_W);
+  };
+  const double np = normal_W.dot(cp.p_W2);
+  return std::max(0.0, support(body2.shape, X_WB2, normal_W) - np) +
+         std::max(0.0, np + support(body1.shape, X_WB1, -normal_W));
+}
+
+}  // namespace
+
+bool FindInitialOverlap(const Model& model, const State& state, double tolerance, BroadPhase* broad,
+                        std::vector<Pose>* X_WB, std::vector<double>* inflation, std::vector<int>* candidates,
+                        std::string* detail) {
+  for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
+    (*X_WB)[b] = state.X_WB(model, b);
+    (*inflation)[b] = 0.0;
+  }
+  broad->FindPairs(*X_WB, *inflation, candidates);
+  for (int p : *candidates) {
+    const double depth = OverlapBound(model, state, model.pairs[p], tolerance);
+    if (depth > tolerance) {
+      *detail = "pair '" + model.PairName(p) + "' overlaps by up to " + FormatNumber(depth) + " m at t = " +
+                FormatNumber(state.t) + " s (overlap_tolerance " + FormatNumber(tolerance) + " m)";
+      return true;
+    }
+  }
+  return false;
+}
+
+bool FindDivergence(const Model& model, const State& state, double max_speed, double max_angular_speed,
+                    std::string* detail) {
+  for (int k = 0; k < model.num_moving(); ++k) {
+    const double speed = state.v_WB(k).norm(), angular = state.w_WB(k).norm();
+    if (speed <= max_speed && angular <= max_angular_speed) continue;
+    *detail = "body '" + model.bodies[model.moving_bodies[k]].name + "' reaches " + FormatNumber(speed) + " m/s, " +
+              FormatNumber(angular) + " rad/s (limits " + FormatNumber(max_speed) + " m/s, " +
+              FormatNumber(max_angular_speed) + " rad/s)";
+    return true;
+  }
+  return false;
+}
+
+}  // namespace implicit_sim

@@ -1,0 +1,566 @@
+#include "implicit_sim/core/step/step_problem.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "implicit_sim/core/ncp/fischer_burmeister.h"
+#include "implicit_sim/core/base/rotation.h"
+#include "implicit_sim/core/step/data.h"
+
+namespace implicit_sim {
+namespace pi = pair_index;
+namespace {
+
+// Tangent basis (t, o) from the normal n and a reference axis e fixed for the step (DESIGN.md pitfall 3):
+// t = (e - (e.n) n) / |e - (e.n) n|, o = n x t, with their derivatives with respect to n.
+void TangentBasis(const Vec3& n, const Vec3& e, Vec3* t, Vec3* o, Mat3* dt_dn, Mat3* do_dn) {
+  const Vec3 u = e - e.dot(n) * n;
+  const double len = u.norm();
+  *t = u / len;
+  *o = n.cross(*t);
+  const Mat3 du_dn = -e.dot(n) * Mat3::Identity() - n * e.transpose();
+  *dt_dn = (Mat3::Identity() - (*t) * t->transpose()) / len * du_dn;
+  *do_dn = -Skew(*t) + Skew(n) * (*dt_dn);
+}
+
+Vec3 LeastAlignedAxis(const Vec3& n) {
+  int axis;
+  n.cwiseAbs().minCoeff(&axis);
+  return Vec3::Unit(axis);
+}
+
+}  // namespace
+
+StepProblem::StepProblem(const Model& model, bool all_pairs)
+    : model_(model), start_(model.bodies.size()), end_(model.bodies.size()), force_scale_(model.ForceScale()) {
+  external_wrench_W_ = Eigen::VectorXd::Zero(6 * model.num_moving());
+  locked_row_.assign(6 * model.num_moving(), 0);
+  for (size_t b = 0; b < model.bodies.size(); ++b) {
+    const int k = model.velocity_slot[b];
+    end_[b].col = k < 0 ? -1 : 6 * k;
+    for (int i = 0; k >= 0 && i < 6; ++i) locked_row_[6 * k + i] = model.bodies[b].locked[i];
+  }
+  pair_base_ = 6 * model.num_moving();
+  for (const Joint& joint : model.joints) {
+    joint_offset_.push_back(pair_base_);
+    pair_base_ += joint.size();
+  }
+  joint_equality_start_.resize(model.joints.size());
+  joint_position_start_.resize(model.joints.size());
+  std::vector<int> pairs;
+  for (int c = 0; all_pairs && c < static_cast<int>(model.pairs.size()); ++c) pairs.push_back(c);
+  std::vector<int> new_blocks;
+  Eigen::VectorXd z;
+  SetActivePairs(pairs, nullptr, &z, &new_blocks);
+}
+
+void StepProblem::SetActivePairs(const std::vector<int>& pairs, const Eigen::VectorXd* z_old, Eigen::VectorXd* z_new,
+                                 std::vector<int>* new_blocks) {
+  const std::vector<PairBlock> old_blocks = blocks_;
+  const std::vector<Vec3> old_axes = tangent_axis_;
+  blocks_.clear();
+  size_ = pair_base_;
+  for (int pair : pairs) {
+    PairBlock block;
+    block.pair = pair;
+    block.offset = size_;
+    block.k1 = static_cast<int>(model_.bodies[model_.pairs[pair].body1].shape.inequalities.size());
+    block.k2 = static_cast<int>(model_.bodies[model_.pairs[pair].body2].shape.inequalities.size());
+    blocks_.push_back(block);
+    size_ += block.size();
+  }
+  tangent_axis_.assign(blocks_.size(), Vec3::UnitX());
+  raw_scratch_ = Eigen::VectorXd::Zero(size_);
+  complementarity_kind_.assign(size_, 0);
+  for (size_t j = 0; j < model_.joints.size(); ++j) {
+    const Joint& joint = model_.joints[j];
+    const int extra = joint_offset_[j] + joint.num_equalities();
+    if (joint.limited) complementarity_kind_[extra] = complementarity_kind_[extra + 1] = 2;  // l / Fs _|_ distance
+    if (joint.friction > 0.0) complementarity_kind_[extra + (joint.limited ? 3 : 1)] = 1;  // sigma_f
+  }
+  for (const PairBlock& blk : blocks_) {
+    for (int i = blk.offset + pi::kAlpha; i < blk.offset + blk.size(); ++i) complementarity_kind_[i] = 1;
+    complementarity_kind_[blk.ln()] = 2;  // the normal force enters as ln / Fs
+  }
+  ++pattern_version_;
+  // Carry the old solution over: the body part, and the blocks of the pairs that stay (both lists are ascending).
+  z_new->setZero(size_);
+  new_blocks->clear();
+  if (z_old) z_new->head(pair_base_) = z_old->head(pair_base_);
+  size_t o = 0;
+  for (size_t c = 0; c < blocks_.size(); ++c) {
+    while (o < old_blocks.size() && old_blocks[o].pair < blocks_[c].pair) ++o;
+    if (z_old && o < old_blocks.size() && old_blocks[o].pair == blocks_[c].pair) {
+      z_new->segment(blocks_[c].offset, blocks_[c].size()) = z_old->segment(old_blocks[o].offset, blocks_[c].size());
+      tangent_axis_[c] = old_axes[o];
+    } else {
+      new_blocks->push_back(static_cast<int>(c));
+    }
+  }
+}
+
+void StepProblem::ActivePairs(std::vector<int>* pairs) const {
+  pairs->clear();
+  for (const PairBlock& blk : blocks_) pairs->push_back(blk.pair);
+}
+
+bool StepProblem::IsComplementarityRow(int row, double* scale) const {
+  *scale = complementarity_kind_[row] == 2 ? 1.0 / force_scale_ : 1.0;
+  return complementarity_kind_[row] != 0;
+}
+
+void StepProblem::BeginStep(const Model& model, const State& start, double h,
+                            const Eigen::VectorXd* external_wrench_W) {
+  h_ = h;
+  force_scale_ = model.ForceScale();
+  if (external_wrench_W) {
+    external_wrench_W_ = *external_wrench_W;
+    for (int k = 0; k < model.num_moving(); ++k) {
+      force_scale_ = std::max(force_scale_, external_wrench_W_.segment<3>(6 * k).norm());
+    }
+  } else {
+    external_wrench_W_.setZero();
+  }
+  for (size_t b = 0; b < model.bodies.size(); ++b) {
+    const Body& body = model.bodies[b];
+    const Pose X_WB = start.X_WB(model, static_cast<int>(b));
+    BodyStep& s = start_[b];
+    s.p0 = X_WB.translation();
+    s.R0 = X_WB.linear();
+    const int k = model.velocity_slot[b];
+    s.v0 = k < 0 ? Vec3::Zero() : start.v_WB(k);
+    s.w0 = k < 0 ? Vec3::Zero() : start.w_WB(k);
+    s.I_W0 = s.R0 * body.I_B * s.R0.transpose();
+  }
+  BeginJoints();
+}
+
+void StepProblem::ResetTangentAxes(const Eigen::VectorXd& z) {
+  for (size_t c = 0; c < blocks_.size(); ++c) ResetTangentAxis(static_cast<int>(c), z);
+}
+
+void StepProblem::ResetTangentAxis(int c, const Eigen::VectorXd& z) {
+  tangent_axis_[c] = LeastAlignedAxis(z.segment<3>(blocks_[c].offset + pi::kN));
+}
+
+void StepProblem::UpdateTangentAxes(Eigen::VectorXd* z) {
+  for (size_t c = 0; c < blocks_.size(); ++c) {
+    const int off = blocks_[c].offset;
+    const Vec3 n = z->segment<3>(off + pi::kN);
+    if (std::abs(tangent_axis_[c].dot(n)) < 0.9 * n.norm()) continue;
+    const FrictionParams& fr = model_.pairs[blocks_[c].pair].friction;
+    Vec3 t, o;
+    Mat3 dt_dn, do_dn;
+    TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
+    // -v_tangential / sigma, independent of the basis.
+    const Vec3 slip_dir = (*z)[off + pi::kSt] / fr.e_t * t + (*z)[off + pi::kSo] / fr.e_o * o;
+    tangent_axis_[c] = LeastAlignedAxis(n);
+    TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
+    (*z)[off + pi::kSt] = fr.e_t * slip_dir.dot(t);
+    (*z)[off + pi::kSo] = fr.e_o * slip_dir.dot(o);
+  }
+}
+
+void StepProblem::PredictClosestPoints(Eigen::VectorXd* z) const {
+  for (size_t c = 0; c < blocks_.size(); ++c) {
+    const ContactPair& pair = model_.pairs[blocks_[c].pair];
+    const int off = blocks_[c].offset;
+    for (const auto& [body, column] : {std::make_pair(pair.body1, off + pi::kA1), std::make_pair(pair.body2, off + pi::kA2)}) {
+      z->segment<3>(column) += h_ * start_[body].v0;
+    }
+    const Vec3 n = z->segment<3>(off + pi::kN);
+    (*z)[off + pi::kD] = n.dot(z->segment<3>(off + pi::kA1) - z->segment<3>(off + pi::kA2));
+  }
+}
+
+void StepProblem::SeedFriction(Eigen::VectorXd* z) const {
+  for (size_t c = 0; c < blocks_.size(); ++c) SeedFriction(static_cast<int>(c), z);
+}
+
+void StepProblem::SeedFriction(int c, Eigen::VectorXd* z) const {
+  const ContactPair& pair = model_.pairs[blocks_[c].pair];
+  const FrictionParams& fr = pair.friction;
+  const PairBlock& blk = blocks_[c];
+  const int off = blk.offset;
+  const BodyStep& s1 = start_[pair.body1];
+  const BodyStep& s2 = start_[pair.body2];
+  const Vec3 n = z->segment<3>(off + pi::kN).normalized();
+  const Vec3 v_rel = (s1.v0 + s1.w0.cross(z->segment<3>(off + pi::kA1) - s1.p0)) -
+                     (s2.v0 + s2.w0.cross(z->segment<3>(off + pi::kA2) - s2.p0));
+  Vec3 t, o;
+  Mat3 dt_dn, do_dn;
+  TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
+  const Vec3 slip(fr.e_t * t.dot(v_rel), fr.e_o * o.dot(v_rel), fr.e_r * n.dot(s1.w0 - s2.w0));
+  const double sigma = slip.norm();
+  z->segment<3>(off + pi::kSt) = sigma > 1e-9 ? Vec3(-slip / sigma) : Vec3::Zero();
+  // No slip yet: sigma = 0, s = 0 would be a saddle of the merit function, so start from sigma > 0 (the rows
+  // e (t.v_rel) + s sigma then determine s, and sigma moves to the slip speed or to 0 when the contact sticks).
+  (*z)[blk.sigma()] = sigma > 1e-9 ? sigma : 1e-3;
+}
+
+void StepProblem::UpdateBodies(const Eigen::VectorXd& z) {
+  for (size_t b = 0; b < end_.size(); ++b) {
+    BodyEnd& e = end_[b];
+    const BodyStep& s = start_[b];
+    if (e.col < 0) {
+      e.p = s.p0;
+      e.R = s.R0;
+      continue;
+    }
+    e.v = z.segment<3>(e.col);
+    e.w = z.segment<3>(e.col + 3);
+    e.p = s.p0 + h_ * e.v;                      // paper eq. 2, Euler step of the position
+    e.R = ExpSO3(h_ * e.w) * s.R0;              // and of the orientation, on SO(3)
+    e.dtheta_dw = h_ * LeftJacobianSO3(h_ * e.w);
+  }
+}
+
+Pose StepProblem::EndPose(int body, const Eigen::VectorXd& z) const {
+  const BodyStep& s = start_[body];
+  Pose X = Pose::Identity();
+  const int col = end_[body].col;
+  X.translation() = col < 0 ? s.p0 : Vec3(s.p0 + h_ * z.segment<3>(col));
+  X.linear() = col < 0 ? s.R0 : Mat3(ExpSO3(h_ * z.segment<3>(col + 3)) * s.R0);
+  return X;
+}
+
+StepProblem::Eval StepProblem::EvaluateInequality(int body, int k, const Vec3& p_W) const {
+  const ConvexShape& shape = model_.bodies[body].shape;
+  const BodyEnd& e = end_[body];
+  const Mat3 R_WS = e.R * shape.X_BS.linear();
+  const Vec3 p_WS = e.p + e.R * shape.X_BS.translation();
+  Eval out;
+  Vec3 g_S;
+  Mat3 H_S;
+  shape.inequalities[k].Evaluate(R_WS.transpose() * (p_W - p_WS), &out.f, &g_S, &H_S);
+  out.g = R_WS * g_S;
+  out.H = R_WS * H_S * R_WS.transpose();
+  return out;
+}
+
+template <typename Block>
+void StepProblem::AddJ(int row, int col, const Block& block) {
+  if (J_dense_) {  // rows of locked velocities are overwritten at the end of EvaluateAll
+    J_dense_->block(row, col, block.rows(), block.cols()) += block;
+  } else if (J_sparse_) {
+    for (int j = 0; j < block.cols(); ++j) {
+      for (int i = 0; i < block.rows(); ++i) AddJ(row + i, col + j, static_cast<double>(block(i, j)));
+    }
+  }
+}
+
+void StepProblem::AddJ(int row, int col, double value) {
+  if (J_dense_) {
+    (*J_dense_)(row, col) += value;
+  } else if (J_sparse_) {
+    if (row < static_cast<int>(locked_row_.size()) && locked_row_[row]) return;  // the pattern leaves them out
+    if (J_sparse_->recording) {
+      J_sparse_->recorded.emplace_back(row, col, value);
+    } else {
+      J_sparse_->matrix.valuePtr()[J_sparse_->slot[J_sparse_->cursor++]] += value;
+    }
+  }
+}
+
+void StepProblem::EvaluateAll(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
+  UpdateBodies(z);
+  Phi->setZero(size_);
+  AddBodyRows(z, Phi);
+  AddJointRows(z, Phi);
+  for (size_t c = 0; c < blocks_.size(); ++c) AddPair(static_cast<int>(c), z, Phi);
+  // Locked degrees of freedom: the row of a locked velocity becomes "velocity = 0" (AddJ skipped its other entries).
+  for (int row = 0; row < static_cast<int>(locked_row_.size()); ++row) {
+    if (!locked_row_[row]) continue;
+    (*Phi)[row] = z[row];
+    if (J_dense_) J_dense_->row(row).setZero();
+    locked_row_[row] = 0;
+    AddJ(row, row, 1.0);
+    locked_row_[row] = 1;
+  }
+}
+
+void StepProblem::Evaluate(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J) {
+  if (J) J->setZero(size_, size_);
+  J_dense_ = J;
+  J_sparse_ = nullptr;
+  EvaluateAll(z, Phi);
+  J_dense_ = nullptr;
+}
+
+void StepProblem::EvaluateSparse(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, SparseJacobian* J) {
+  J_dense_ = nullptr;
+  J_sparse_ = J;
+  if (J) {
+    J->recording = J->pattern_version != pattern_version_;
+    J->recorded.clear();
+    J->cursor = 0;
+    if (!J->recording) std::fill(J->matrix.valuePtr(), J->matrix.valuePtr() + J->matrix.nonZeros(), 0.0);
+  }
+  EvaluateAll(z, Phi);
+  J_sparse_ = nullptr;
+  if (!J || !J->recording) return;
+  // First evaluation for this layout: build the pattern (duplicates summed) and each emitted entry's slot in it.
+  J->matrix.resize(size_, size_);
+  J->matrix.setFromTriplets(J->recorded.begin(), J->recorded.end());
+  J->matrix.makeCompressed();
+  J->slot.resize(J->recorded.size());
+  for (size_t k = 0; k < J->recorded.size(); ++k) {
+    const int col = J->recorded[k].col();
+    const int* begin = J->matrix.innerIndexPtr() + J->matrix.outerIndexPtr()[col];
+    const int* end = J->matrix.innerIndexPtr() + J->matrix.outerIndexPtr()[col + 1];
+    J->slot[k] = static_cast<int>(std::lower_bound(begin, end, J->recorded[k].row()) - J->matrix.innerIndexPtr());
+  }
+  J->pattern_version = pattern_version_;
+  J->recording = false;
+}
+
+// Newton-Euler in impulse form divided by h (paper eq. 1 discretized): force units, scaled by 1/Fs.
+void StepProblem::AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
+  const double Fs = force_scale_;
+  for (int k = 0; k < model_.num_moving(); ++k) {
+    const int b = model_.moving_bodies[k];
+    const Body& body = model_.bodies[b];
+    const BodyStep& s = start_[b];
+    const int row = 6 * k;
+    const Vec3 f_ext = body.mass * model_.gravity_W + body.f_applied_W + external_wrench_W_.segment<3>(row);
+    const Vec3 tau_ext = body.tau_applied_W + external_wrench_W_.segment<3>(row + 3);
+    Phi->segment<3>(row) = (body.mass * (z.segment<3>(row) - s.v0) / h_ - f_ext) / Fs;
+    // Angular momentum form: (I_W(R1) w1 - I_W(R0) w0) / h = torque, with the inertia at the end-of-step
+    // orientation R1 = Exp(h w1) R0. It holds the gyroscopic effect implicitly and conserves angular momentum exactly
+    // without torque (the explicit w0 x I w0 term drifted 6 % in energy over 10 s on a tumbling ellipsoid).
+    const BodyEnd& e = end_[b];
+    const Mat3 I_W1 = e.R * body.I_B * e.R.transpose();
+    const Vec3 w1 = z.segment<3>(row + 3);
+    Phi->segment<3>(row + 3) = ((I_W1 * w1 - s.I_W0 * s.w0) / h_ - tau_ext) / Fs;
+    AddJ(row, row, Mat3(Mat3::Identity() * body.mass / (h_ * Fs)));
+    // d(I_W w)/dtheta = I_W [w]x - [I_W w]x for R -> Exp(dtheta) R, and dtheta/dw1 = h J_l(h w1).
+    AddJ(row + 3, row + 3, Mat3((I_W1 + (I_W1 * Skew(w1) - Skew(I_W1 * w1)) * e.dtheta_dw) / (h_ * Fs)));
+  }
+}
+
+// Adds -sign * (F, r x F + lr n) / Fs to the body rows of `body` (sign +1 for body 1, -1 for body 2).
+void StepProblem::AddContactWrench(int c, int body, double sign, const Vec3& r, const ContactWrench& w,
+                                   Eigen::VectorXd* Phi) {
+  const BodyEnd& e = end_[body];
+  if (e.col < 0) return;
+  const PairBlock& blk = blocks_[c];
+  const int off = blk.offset, row = e.col;
+  const int a_col = off + (sign > 0 ? pi::kA1 : pi::kA2);
+  const double s = sign / force_scale_;
+  Phi->segment<3>(row) -= s * w.F;
+  Phi->segment<3>(row + 3) -= s * (r.cross(w.F) + w.lr * w.n);
+  if (!J_dense_ && !J_sparse_) return;
+  const Mat3 rx = Skew(r), Fx = Skew(w.F);
+  AddJ(row, off + pi::kN, Mat3(-(s * w.dF_dn)));
+  AddJ(row, blk.ln(), Vec3(-(s * w.dF_dln)));
+  AddJ(row, off + pi::kSt, Vec3(-(s * w.dF_dst)));
+  AddJ(row, off + pi::kSo, Vec3(-(s * w.dF_dso)));
+  AddJ(row + 3, a_col, Mat3(s * Fx));         // d(r x F)/da = -[F]x
+  AddJ(row + 3, e.col, Mat3(-(s * h_ * Fx)));  // r = a - p0 - h v
+  AddJ(row + 3, off + pi::kN, Mat3(-(s * (rx * w.dF_dn + w.lr * Mat3::Identity()))));
+  AddJ(row + 3, blk.ln(), Vec3(-(s * (rx * w.dF_dln + w.dlr_dln * w.n))));
+  AddJ(row + 3, off + pi::kSt, Vec3(-(s * rx * w.dF_dst)));
+  AddJ(row + 3, off + pi::kSo, Vec3(-(s * rx * w.dF_dso)));
+  AddJ(row + 3, off + pi::kSr, Vec3(-(s * w.dlr_dsr * w.n)));
+}
+
+void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
+  const ContactPair& pair = model_.pairs[blocks_[c].pair];
+  const FrictionParams& fr = pair.friction;
+  const PairBlock& blk = blocks_[c];
+  const int off = blk.offset;
+  const Vec3 a1 = z.segment<3>(off + pi::kA1), a2 = z.segment<3>(off + pi::kA2), n = z.segment<3>(off + pi::kN);
+  const double d = z[off + pi::kD], st = z[off + pi::kSt], so = z[off + pi::kSo], sr = z[off + pi::kSr];
+  const double ln = z[blk.ln()], sigma = z[blk.sigma()];
+  const BodyEnd& e1 = end_[pair.body1];
+  const BodyEnd& e2 = end_[pair.body2];
+  const Vec3 r1 = a1 - e1.p, r2 = a2 - e2.p;
+  const Mat3 I3 = Mat3::Identity();
+  const bool want_J = J_dense_ || J_sparse_;
+  auto add = [this, want_J](int row, int col, const auto& block) {
+    if (want_J) AddJ(row, col, block);
+  };
+  auto add1 = [this, want_J](int row, int col, double value) {
+    if (want_J) AddJ(row, col, value);
+  };
+
+  // a1 - a2 - d n = 0 (the closest points are d apart along n).
+  Phi->segment<3>(off) = a1 - a2 - d * n;
+  add(off, off + pi::kA1, I3);
+  add(off, off + pi::kA2, -I3);
+  add(off, off + pi::kN, -d * I3);
+  add(off, off + pi::kD, -n);
+
+  // Normal cones (Appendix eq. 20-22 in the normal form): n = sum beta grad g(a2), -n = sum alpha grad f(a1),
+  // with alpha_i _|_ -f_i(a1) and beta_j _|_ -g_j(a2).
+  struct Side {
+    int body, rows, a_col, mult_col, count;
+    double n_sign;
+    Vec3 a, r;
+    const BodyEnd* e;
+  };
+  const Side sides[2] = {{pair.body2, off + 3, off + pi::kA2, blk.beta(), blk.k2, 1.0, a2, r2, &e2},
+                         {pair.body1, off + 6, off + pi::kA1, off + pi::kAlpha, blk.k1, -1.0, a1, r1, &e1}};
+  for (const Side& side : sides) {
+    Phi->segment<3>(side.rows) = side.n_sign * n;
+    add(side.rows, off + pi::kN, side.n_sign * I3);
+    for (int k = 0; k < side.count; ++k) {
+      const Eval ev = EvaluateInequality(side.body, k, side.a);
+      const double mult = z[side.mult_col + k];
+      Phi->segment<3>(side.rows) -= mult * ev.g;
+      add(side.rows, side.mult_col + k, -ev.g);
+      add(side.rows, side.a_col, -mult * ev.H);
+      const FB fb = FischerBurmeister(mult, -ev.f, smoothing_, raw_);
+      const int fb_row = side.mult_col + k;
+      (*Phi)[fb_row] = fb.value;
+      add1(fb_row, side.mult_col + k, fb.da);
+      add(fb_row, side.a_col, Eigen::RowVector3d(-fb.db * ev.g.transpose()));
+      if (side.e->col >= 0) {  // the body moves: f and grad f depend on its end pose
+        const Mat3& dth = side.e->dtheta_dw;
+        add(side.rows, side.e->col, mult * h_ * ev.H);
+        add(side.rows, side.e->col + 3, Mat3(-mult * (ev.H * Skew(side.r) - Skew(ev.g)) * dth));
+        add(fb_row, side.e->col, Eigen::RowVector3d(fb.db * h_ * ev.g.transpose()));
+        add(fb_row, side.e->col + 3, Eigen::RowVector3d(fb.db * side.r.cross(ev.g).transpose() * dth));
+      }
+    }
+  }
+
+  // |n|^2 = 1.
+  (*Phi)[off + 9] = 0.5 * (n.squaredNorm() - 1.0);
+  add(off + 9, off + pi::kN, Eigen::RowVector3d(n.transpose()));
+
+  // Friction (paper eq. 10 with its typo fixed, divided by mu e ln): with the friction forces written as fractions of
+  // the friction ellipsoid, lt = mu e_t ln s_t (and s_o, s_r alike), the rows e_t (t.v_rel) + s_t sigma = 0,
+  // e_o (o.v_rel) + s_o sigma = 0, e_r (n.w_rel) + s_r sigma = 0 stay regular when ln = 0 (a separated contact).
+  Vec3 t, o;
+  Mat3 dt_dn, do_dn;
+  TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
+  const Vec3 v_rel = (e1.v + e1.w.cross(r1)) - (e2.v + e2.w.cross(r2));
+  const Vec3 w_rel = e1.w - e2.w;
+  // Adds coeff * u^T d(v_rel)/d(unknowns) to `row`.
+  auto add_rel_velocity = [&](int row, double coeff, const Vec3& u) {
+    const Side* both[2] = {&sides[1], &sides[0]};
+    for (int i = 0; i < 2; ++i) {
+      const Side& side = *both[i];
+      if (side.e->col < 0) continue;
+      const double s = i == 0 ? coeff : -coeff;
+      add(row, side.a_col, Eigen::RowVector3d(s * u.transpose() * Skew(side.e->w)));
+      add(row, side.e->col, Eigen::RowVector3d(s * u.transpose() * (I3 - h_ * Skew(side.e->w))));
+      add(row, side.e->col + 3, Eigen::RowVector3d(-s * u.transpose() * Skew(side.r)));
+    }
+  };
+  // At a separated contact (d > 0, so ln = 0) the friction fractions are physically void, and with no slip
+  // (sigma = 0) nothing would determine them: the Jacobian is singular wherever two bodies rest near each other
+  // without touching. The LM step of the dense solver copes; for the sparse LU the rows use sigma + max(d, 0) / h in
+  // place of sigma (set_regular_separated_friction), which fixes s at a separated contact and is exactly the paper's
+  // row at a touching one (d = 0).
+  const double sigma_eff = regular_separated_friction_ ? sigma + std::max(d, 0.0) / h_ : sigma;
+  const double dsigma_dd = regular_separated_friction_ && d > 0.0 ? 1.0 / h_ : 0.0;
+  const int rt = off + 10, ro = off + 11, rr = off + 12;
+  (*Phi)[rt] = fr.e_t * t.dot(v_rel) + st * sigma_eff;
+  (*Phi)[ro] = fr.e_o * o.dot(v_rel) + so * sigma_eff;
+  (*Phi)[rr] = fr.e_r * n.dot(w_rel) + sr * sigma_eff;
+  if (want_J) {
+    add(rt, off + pi::kN, Eigen::RowVector3d(fr.e_t * v_rel.transpose() * dt_dn));
+    add(ro, off + pi::kN, Eigen::RowVector3d(fr.e_o * v_rel.transpose() * do_dn));
+    add(rr, off + pi::kN, Eigen::RowVector3d(fr.e_r * w_rel.transpose()));
+    add_rel_velocity(rt, fr.e_t, t);
+    add_rel_velocity(ro, fr.e_o, o);
+    if (e1.col >= 0) add(rr, e1.col + 3, Eigen::RowVector3d(fr.e_r * n.transpose()));
+    if (e2.col >= 0) add(rr, e2.col + 3, Eigen::RowVector3d(-fr.e_r * n.transpose()));
+    // The diagonal entries carry the sparse solver's proximal regularization (never Phi).
+    add1(rt, off + pi::kSt, sigma_eff + regularization_);
+    add1(ro, off + pi::kSo, sigma_eff + regularization_);
+    add1(rr, off + pi::kSr, sigma_eff + regularization_);
+    add1(rt, blk.sigma(), st);
+    add1(ro, blk.sigma(), so);
+    add1(rr, blk.sigma(), sr);
+    add1(rt, off + pi::kD, st * dsigma_dd);
+    add1(ro, off + pi::kD, so * dsigma_dd);
+    add1(rr, off + pi::kD, sr * dsigma_dd);
+  }
+
+  // Non-penetration (paper eq. 11 with the signed distance d as gap): ln / Fs _|_ d.
+  const double Fs = force_scale_;
+  const FB fb_n = FischerBurmeister(ln / Fs, d, smoothing_, raw_);
+  (*Phi)[blk.ln()] = fb_n.value;
+  add1(blk.ln(), blk.ln(), (fb_n.da + regularization_) / Fs);
+  add1(blk.ln(), off + pi::kD, fb_n.db);
+
+  // Friction ellipsoid (paper eq. 5 divided by (mu ln)^2): sigma _|_ 1 - s_t^2 - s_o^2 - s_r^2.
+  const FB fb_s = FischerBurmeister(sigma, 1.0 - st * st - so * so - sr * sr, smoothing_, raw_);
+  (*Phi)[blk.sigma()] = fb_s.value;
+  add1(blk.sigma(), blk.sigma(), fb_s.da);
+  add1(blk.sigma(), off + pi::kSt, -2.0 * fb_s.db * st);
+  add1(blk.sigma(), off + pi::kSo, -2.0 * fb_s.db * so);
+  add1(blk.sigma(), off + pi::kSr, -2.0 * fb_s.db * sr);
+
+  // The contact wrench on both bodies (paper eq. 1: W_n p_n + W_t p_t + W_o p_o + W_r p_r), with
+  // lt = mu e_t ln s_t, lo = mu e_o ln s_o, lr = mu e_r ln s_r.
+  ContactWrench w;
+  w.n = n;
+  const double mu = fr.mu;
+  const Vec3 friction_dir = mu * (fr.e_t * st * t + fr.e_o * so * o);
+  w.F = ln * (n + friction_dir);
+  w.dF_dn = ln * (I3 + mu * (fr.e_t * st * dt_dn + fr.e_o * so * do_dn));
+  w.dF_dln = n + friction_dir;
+  w.dF_dst = mu * fr.e_t * ln * t;
+  w.dF_dso = mu * fr.e_o * ln * o;
+  w.lr = mu * fr.e_r * ln * sr;
+  w.dlr_dln = mu * fr.e_r * sr;
+  w.dlr_dsr = mu * fr.e_r * ln;
+  AddContactWrench(c, pair.body1, +1.0, r1, w, Phi);
+  AddContactWrench(c, pair.body2, -1.0, r2, w, Phi);
+}
+
+void StepProblem::RawResiduals(const Eigen::VectorXd& z, double* equations, double* complementarity) {
+  const bool raw = raw_;
+  raw_ = true;  // complementarity rows give b(z); the variable side a is scale * z[i]
+  Evaluate(z, &raw_scratch_, nullptr);
+  raw_ = raw;
+  *equations = *complementarity = 0.0;
+  for (int i = 0; i < size_; ++i) {
+    double scale;
+    if (IsComplementarityRow(i, &scale)) {
+      *complementarity = std::max(*complementarity, std::abs(std::min(scale * z[i], raw_scratch_[i])));
+    } else {
+      *equations = std::max(*equations, std::abs(raw_scratch_[i]));
+    }
+  }
+}
+
+double StepProblem::ComplementarityError(const Eigen::VectorXd& z) {
+  double equations, complementarity;
+  RawResiduals(z, &equations, &complementarity);
+  return complementarity;
+}
+
+void StepProblem::Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>* contacts) {
+  UpdateBodies(z);
+  contacts->resize(blocks_.size());
+  for (size_t c = 0; c < blocks_.size(); ++c) {
+    const ContactPair& pair = model_.pairs[blocks_[c].pair];
+    const PairBlock& blk = blocks_[c];
+    const int off = blk.offset;
+    ContactResult& out = (*contacts)[c];
+    out.pair = blk.pair;
+    out.p_WA1 = z.segment<3>(off + pi::kA1);
+    out.p_WA2 = z.segment<3>(off + pi::kA2);
+    out.n_W = z.segment<3>(off + pi::kN);
+    out.gap = z[off + pi::kD];
+    out.normal_force = z[blk.ln()];
+    Vec3 t, o;
+    Mat3 dt_dn, do_dn;
+    TangentBasis(out.n_W, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
+    const FrictionParams& fr = pair.friction;
+    const double mu_ln = fr.mu * out.normal_force;
+    out.friction_force_W = mu_ln * (fr.e_t * z[off + pi::kSt] * t + fr.e_o * z[off + pi::kSo] * o);
+    out.torsional_moment = mu_ln * fr.e_r * z[off + pi::kSr];
+    const BodyEnd& e1 = end_[pair.body1];
+    const BodyEnd& e2 = end_[pair.body2];
+    const Vec3 v_rel = (e1.v + e1.w.cross(out.p_WA1 - e1.p)) - (e2.v + e2.w.cross(out.p_WA2 - e2.p));
+    out.slip_speed = (v_rel - v_rel.dot(out.n_W) * out.n_W).norm();
+  }
+}
+
+}  // namespace implicit_sim

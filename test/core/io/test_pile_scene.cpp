@@ -1,0 +1,82 @@
+// The S1 pile generator: the scene loads, has the specified layout and draws, and starts without overlaps.
+#include "implicit_sim/core/io/pile_scene.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "implicit_sim/core/geometry/support.h"
+#include "implicit_sim/core/model/urdf_loader.h"
+
+namespace implicit_sim {
+namespace {
+
+TEST(PileScene, LayoutFollowsTheScenarioAndSpheresStartApart) {
+  for (PileShape shape : {PileShape::kSphere, PileShape::kEllipsoid}) {
+    const Model model = LoadSceneFromString(MakePileUrdf(100, shape, 42, false), "pile");  // the scenario's layout
+    ASSERT_EQ(model.num_moving(), 100);
+    ASSERT_EQ(model.bodies.size(), 105u);  // + floor and four walls
+    std::mt19937 rng(42);
+    std::uniform_real_distribution<double> jitter(-0.01, 0.01);
+    double min_spacing = 1e9;
+    for (int i = 0; i < 100; ++i) {
+      const double j1 = jitter(rng), j2 = jitter(rng), j3 = jitter(rng);
+      const Vec3 expected(-0.42 + 0.12 * (i % 8) + j1, -0.42 + 0.12 * ((i / 8) % 8) + j2, 0.08 + 0.12 * (i / 64) +
+                                                                                            std::abs(j3));
+      const Body& body = model.bodies[model.FindBody("body_" + std::to_string(i))];
+      EXPECT_LT((body.X_WB0.translation() - expected).norm(), 1e-15) << i;
+      EXPECT_DOUBLE_EQ(body.mass, 0.1);
+      for (int k = 0; k < i; ++k) {
+        const Body& other = model.bodies[model.FindBody("body_" + std::to_string(k))];
+        min_spacing = std::min(min_spacing, (body.X_WB0.translation() - other.X_WB0.translation()).norm());
+      }
+      // Inside the box and above the floor, with the largest semi-axis as margin.
+      EXPECT_GT(body.X_WB0.translation().z(), 0.06);
+      EXPECT_LT(body.X_WB0.translation().cwiseAbs().head<2>().maxCoeff(), 0.5 - 0.06);
+    }
+    // Spheres (r = 0.05) never overlap at the start: the grid spacing 0.12 less two jitters of 0.01 leaves 0.10.
+    // (The scenario's ellipsoids, 0.12 m long along x, can: see README.md.)
+    if (shape == PileShape::kSphere) EXPECT_GE(min_spacing, 0.1);
+    // The walls hold the bodies in: every wall's half-space excludes the box's centre.
+    for (const char* wall : {"floor", "wall_px", "wall_nx", "wall_py", "wall_ny"}) {
+      const Body& w = model.bodies[model.FindBody(wall)];
+      const Pose X_WS = w.X_WB0 * w.shape.X_BS;
+      EXPECT_GT(w.shape.inequalities[0].Value(X_WS.inverse() * Vec3(0, 0, 0.2)), 0.0) << wall;
+    }
+  }
+  EXPECT_THROW(MakePileUrdf(0, PileShape::kSphere), std::invalid_argument);
+}
+
+TEST(PileScene, EllipsoidRowsAreSpreadToTheNearestNonOverlappingLayout) {
+  const Model layout = LoadSceneFromString(MakePileUrdf(100, PileShape::kEllipsoid, 42, false), "layout");
+  const Model spread = LoadSceneFromString(MakePileUrdf(100, PileShape::kEllipsoid), "spread");
+  int overlapping_before = 0, overlapping_after = 0;
+  double max_shift = 0.0;
+  for (int i = 0; i < 100; ++i) {
+    const Body& a = layout.bodies[layout.FindBody("body_" + std::to_string(i))];
+    const Body& b = spread.bodies[spread.FindBody("body_" + std::to_string(i))];
+    const Vec3 shift = b.X_WB0.translation() - a.X_WB0.translation();
+    max_shift = std::max(max_shift, shift.norm());
+    EXPECT_EQ(shift.y(), 0.0);
+    EXPECT_EQ(shift.z(), 0.0);
+    EXPECT_TRUE(b.X_WB0.linear().isApprox(Mat3::Identity(), 1e-15));
+    EXPECT_LT(std::abs(b.X_WB0.translation().x()), 0.5 - 0.06);  // inside the walls
+    if (i % 8 == 0) continue;
+    // x-neighbours in a row, by the independent distance oracle (negative distance: overlap).
+    for (const auto& [model, count] : {std::make_pair(&layout, &overlapping_before),
+                                       std::make_pair(&spread, &overlapping_after)}) {
+      const Body& left = model->bodies[model->FindBody("body_" + std::to_string(i - 1))];
+      const Body& right = model->bodies[model->FindBody("body_" + std::to_string(i))];
+      const ClosestPointsResult cp = FindClosestPoints(left.shape, left.X_WB0, right.shape, right.X_WB0);
+      *count += cp.distance < 1e-6;
+    }
+    EXPECT_GE(b.X_WB0.translation().x() - spread.bodies[spread.FindBody("body_" + std::to_string(i - 1))]
+                                              .X_WB0.translation().x(), 0.12 - 1e-12);
+  }
+  EXPECT_GT(overlapping_before, 10);
+  EXPECT_EQ(overlapping_after, 0);
+  EXPECT_LT(max_shift, 0.02);
+}
+
+}  // namespace
+}  // namespace implicit_sim

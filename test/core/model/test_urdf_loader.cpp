@@ -1,0 +1,137 @@
+// Scene loading: the shipped scenes load with the scenario's parameters; bad scenes are refused with a message that
+// names the link or attribute.
+#include "implicit_sim/core/model/urdf_loader.h"
+
+#include <cmath>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "scenario_runner.h"
+
+namespace implicit_sim {
+namespace {
+
+using testing_support::ScenePath;
+
+TEST(UrdfLoader, P3SceneHasTheScenarioParameters) {
+  const Model m = LoadSceneFromFile(ScenePath("p3_sphere_on_two_spheres.urdf"));
+  EXPECT_EQ(m.scene_name, "p3_sphere_on_two_spheres");
+  ASSERT_EQ(m.bodies.size(), 3u);
+  ASSERT_EQ(m.num_moving(), 1);
+  const Body& ball = m.bodies[m.FindBody("ball")];
+  EXPECT_DOUBLE_EQ(ball.mass, 1.0);
+  EXPECT_TRUE(ball.I_B.isApprox(0.4 * Mat3::Identity()));
+  EXPECT_TRUE(ball.f_applied_W.isApprox(Vec3(1.0, 2.6, -9.81)));
+  EXPECT_TRUE(m.gravity_W.isZero());
+  EXPECT_TRUE(ball.X_WB0.translation().isApprox(Vec3(0, 6.62105263157895, 8.78417110772903)));
+  EXPECT_TRUE(m.bodies[m.FindBody("sphere_b")].is_fixed);
+  EXPECT_DOUBLE_EQ(m.bodies[m.FindBody("sphere_b")].shape.size[0], 9.0);
+  ASSERT_EQ(m.pairs.size(), 2u);
+  EXPECT_EQ(m.PairName(0), "ball-sphere_a");
+  EXPECT_EQ(m.PairName(1), "ball-sphere_b");
+  EXPECT_DOUBLE_EQ(m.pairs[0].friction.mu, 0.2);
+  EXPECT_DOUBLE_EQ(m.pairs[1].friction.e_r, 0.3);
+}
+
+TEST(UrdfLoader, P1DiscIsACylinderAlongWorldYWithLockedAxes) {
+  const Model m = LoadSceneFromFile(ScenePath("p1_ngon10.urdf"));
+  const Body& disc = m.bodies[m.FindBody("disc")];
+  EXPECT_EQ(disc.shape.type, ShapeType::kPrism);
+  EXPECT_EQ(disc.shape.sides, 10);
+  const Vec3 axis_W = disc.X_WB0.linear() * disc.shape.X_BS.linear() * Vec3::UnitZ();
+  EXPECT_NEAR(std::abs(axis_W.y()), 1.0, 1e-12);
+  const Vec3 vertex_W = disc.X_WB0 * (disc.shape.X_BS * Vec3(1.0, 0, 0));  // the prism's vertex on +x
+  EXPECT_NEAR(vertex_W.z(), 0.0, 1e-12);                                    // points down, onto the ground
+  EXPECT_TRUE(disc.v_WB0.isApprox(Vec3(-3, 0, 0)));
+  EXPECT_TRUE(disc.w_WB0.isApprox(Vec3(0, -3, 0)));
+  EXPECT_FALSE(disc.locked[0]);
+  EXPECT_TRUE(disc.locked[1]);
+  EXPECT_TRUE(disc.locked[3]);
+  EXPECT_FALSE(disc.locked[4]);
+  EXPECT_TRUE(disc.locked[5]);
+  EXPECT_DOUBLE_EQ(disc.I_B(1, 1), 0.5);
+}
+
+std::string Scene(const std::string& ball_collision, const std::string& extension = "",
+                  const std::string& inertial =
+                      "<inertial><mass value='1'/><inertia ixx='0.4' iyy='0.4' izz='0.4' ixy='0' ixz='0' iyz='0'/>"
+                      "</inertial>",
+                  const std::string& joint_type = "floating") {
+  return "<robot name='t'>" + extension +
+         "<link name='world'/>"
+         "<link name='ground'><collision><geometry><box size='1 1 0.01'/></geometry><implicit type='halfspace'/>"
+         "</collision></link>"
+         "<joint name='g' type='fixed'><parent link='world'/><child link='ground'/></joint>"
+         "<link name='ball'>" + inertial + "<collision>" + ball_collision + "</collision></link>"
+         "<joint name='b' type='" + joint_type + "'><parent link='world'/><child link='ball'/>"
+         "<origin xyz='0 0 1'/></joint></robot>";
+}
+
+const char* kSphere = "<geometry><sphere radius='1'/></geometry>";
+
+void ExpectRefused(const std::string& xml, const std::string& must_mention) {
+  try {
+    LoadSceneFromString(xml);
+    ADD_FAILURE() << "accepted a bad scene; expected an error mentioning '" << must_mention << "'";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(must_mention), std::string::npos) << e.what();
+  }
+}
+
+TEST(UrdfLoader, AcceptsTheMinimalScene) {
+  const Model m = LoadSceneFromString(Scene(kSphere));
+  EXPECT_EQ(m.pairs.size(), 1u);
+  EXPECT_EQ(m.PairName(0), "ball-ground");
+}
+
+TEST(UrdfLoader, ComputesInertiaFromTheShapeWhenThereIsNoInertial) {
+  const Model m = LoadSceneFromString(
+      Scene("<geometry><sphere radius='1'/></geometry><implicit type='ellipsoid' semi_axes='0.3 0.2 0.1' mass='2'/>",
+            "", ""));
+  const Body& b = m.bodies[m.FindBody("ball")];
+  EXPECT_DOUBLE_EQ(b.mass, 2.0);
+  EXPECT_NEAR(b.I_B(0, 0), 2.0 * (0.04 + 0.01) / 5.0, 1e-15);
+}
+
+TEST(UrdfLoader, RefusesBadScenesNamingWhatIsWrong) {
+  ExpectRefused("<robot", "not well-formed");
+  ExpectRefused("<notrobot/>", "<robot>");
+  ExpectRefused(Scene(kSphere, "", "<inertial><mass value='-1'/><inertia ixx='1' iyy='1' izz='1' ixy='0' ixz='0' "
+                                   "iyz='0'/></inertial>"),
+                "link 'ball': mass");
+  ExpectRefused(Scene(kSphere, "", "<inertial><mass value='1'/><inertia ixx='1' iyy='1' izz='3' ixy='0' ixz='0' "
+                                   "iyz='0'/></inertial>"),
+                "triangle inequality");
+  ExpectRefused(Scene(kSphere + std::string("<implicit type='blob'/>")), "'blob' is unknown");
+  ExpectRefused(Scene(kSphere + std::string("<implicit type='superellipsoid' semi_axes='1 1 1' exponent='1.5'/>")),
+                "exponent");
+  ExpectRefused(Scene(kSphere + std::string("<implicit type='ellipsoid' semi_axes='1 0 1'/>")), "semi_axes");
+  ExpectRefused(Scene(kSphere + std::string("<implicit type='sphere' radius='nan'/>")), "radius");
+  ExpectRefused(Scene(kSphere, "<implicit_sim><friction mu='-1'/></implicit_sim>"), "'mu'");
+  ExpectRefused(Scene(kSphere, "<implicit_sim><friction e_r='0'/></implicit_sim>"), "'e_r'");
+  ExpectRefused(Scene(kSphere, "<implicit_sim><body link='ball' velocity='1 0 0' locked='x'/></implicit_sim>"),
+                "locked axis");
+  ExpectRefused(Scene(kSphere, "<implicit_sim><body link='ball' locked='q'/></implicit_sim>"), "'q'");
+  ExpectRefused(Scene(kSphere, "<implicit_sim><body link='nobody'/></implicit_sim>"), "<body>");
+  ExpectRefused(Scene(kSphere, "<implicit_sim><wind/></implicit_sim>"), "<wind>");
+  ExpectRefused(Scene("<geometry><box size='1 2'/></geometry>"),
+                "link 'ball' <collision> <geometry> <box> attribute 'size'");
+  ExpectRefused(Scene("<geometry><mesh filename='x.stl'/></geometry>"), "link 'ball': mesh");
+  ExpectRefused(Scene(kSphere, "", "", "floating"), "link 'ball'");
+  ExpectRefused(Scene(kSphere, "", std::string("<inertial><mass value='1'/><inertia ixx='1' iyy='1' izz='1' ixy='0' "
+                                               "ixz='0' iyz='0'/></inertial>"),
+                      "revolute"),
+                "joint 'b'");
+  ExpectRefused(Scene(kSphere, "", std::string("<inertial><mass value='1'/><inertia ixx='1' iyy='1' izz='1' ixy='0' "
+                                               "ixz='0' iyz='0'/></inertial>"),
+                      "fixed"),
+                "no moving body");
+}
+
+TEST(UrdfLoader, RefusesAMissingFile) {
+  EXPECT_THROW(LoadSceneFromFile("/nonexistent/scene.urdf"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace implicit_sim
