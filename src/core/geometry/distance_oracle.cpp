@@ -17,11 +17,9 @@
 #include <cmath>
 #include <exception>
 #include <limits>
-#include <sstream>
 #include <vector>
 
-#include <IpIpoptApplication.hpp>
-#include <IpTNLP.hpp>
+#include "base/ipopt_app.h"
 
 namespace implicit_sim {
 namespace {
@@ -55,20 +53,17 @@ void HalfSpacePlane(const ConvexShape& shape, const Pose& X_WB, Vec3* n_W, Vec3*
 
 // Both problems in one TNLP. kClosest: 6 variables (x1, x2), objective |x1 - x2|^2. kSupport: 3 variables,
 // objective -u.x, box bounds around `center`.
-class ShapeNlp : public Ipopt::TNLP {
+class ShapeNlp : public CapturingTnlp {
  public:
   enum class Mode { kClosest, kSupport };
 
   ShapeNlp(Mode mode, std::vector<PosedInequality> rows, const Eigen::VectorXd& x0)
-      : mode_(mode), rows_(std::move(rows)), x0_(x0), x_(x0) {}
+      : CapturingTnlp(x0), mode_(mode), rows_(std::move(rows)), x0_(x0) {}
 
   void SetSupport(const Vec3& u_W, const Vec3& center_W) {
     u_W_ = u_W;
     center_W_ = center_W;
   }
-  bool finalized() const { return finalized_; }
-  Ipopt::SolverReturn status() const { return status_; }
-  const Eigen::VectorXd& x() const { return x_; }
 
   bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag, IndexStyleEnum& index_style) override {
     n = num_vars();
@@ -172,14 +167,6 @@ class ShapeNlp : public Ipopt::TNLP {
     return true;
   }
 
-  void finalize_solution(Ipopt::SolverReturn status, Index n, const Number* x, const Number*, const Number*, Index,
-                         const Number*, const Number*, Number, const Ipopt::IpoptData*,
-                         Ipopt::IpoptCalculatedQuantities*) override {
-    finalized_ = true;
-    status_ = status;
-    for (Index i = 0; i < n; ++i) x_[i] = x[i];
-  }
-
  private:
   Index num_vars() const { return mode_ == Mode::kClosest ? 6 : 3; }
   static Index Tri(Index r, Index c) { return r * (r + 1) / 2 + c; }  // lower-triangle entry (r >= c)
@@ -201,11 +188,8 @@ class ShapeNlp : public Ipopt::TNLP {
   Mode mode_;
   std::vector<PosedInequality> rows_;
   Eigen::VectorXd x0_;
-  Eigen::VectorXd x_;
   Vec3 u_W_ = Vec3::Zero();
   Vec3 center_W_ = Vec3::Zero();
-  bool finalized_ = false;
-  Ipopt::SolverReturn status_ = Ipopt::INTERNAL_ERROR;
 };
 
 void AppendRows(const ConvexShape& shape, const Pose& X_WB, int block, std::vector<PosedInequality>* rows) {
@@ -215,20 +199,15 @@ void AppendRows(const ConvexShape& shape, const Pose& X_WB, int block, std::vect
 
 // Runs Ipopt on `nlp`; true when it converged (to tol or to the acceptable level) and reported its solution.
 bool RunIpopt(const Ipopt::SmartPtr<ShapeNlp>& nlp) {
-  Ipopt::SmartPtr<Ipopt::IpoptApplication> app = IpoptApplicationFactory();
-  app->Options()->SetIntegerValue("print_level", 0);
-  app->Options()->SetStringValue("sb", "yes");  // no banner
-  app->Options()->SetNumericValue("tol", 1e-12);
-  app->Options()->SetNumericValue("acceptable_tol", 1e-9);
-  app->Options()->SetIntegerValue("max_iter", 500);
-  app->Options()->SetStringValue("mu_strategy", "adaptive");
-  app->Options()->SetNumericValue("bound_relax_factor", 0.0);
-  app->Options()->SetStringValue("honor_original_bounds", "yes");
-  std::istringstream no_options_file;  // do not pick up a stray ipopt.opt from the working directory
-  if (app->Initialize(no_options_file) != Ipopt::Solve_Succeeded) return false;
+  IpoptSettings settings;
+  settings.tol = 1e-12;
+  settings.acceptable_tol = 1e-9;
+  settings.max_iter = 500;
+  settings.honor_bounds = true;
+  const Ipopt::SmartPtr<Ipopt::IpoptApplication> app = MakeQuietIpopt(settings);
+  if (!IsValid(app)) return false;
   const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(GetRawPtr(nlp)));
-  return (status == Ipopt::Solve_Succeeded || status == Ipopt::Solved_To_Acceptable_Level) && nlp->finalized() &&
-         nlp->x().allFinite();
+  return IpoptSolved(status) && nlp->finalized() && nlp->x().allFinite();
 }
 
 }  // namespace

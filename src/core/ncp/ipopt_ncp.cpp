@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
-#include <sstream>
 #include <vector>
 
-#include <IpIpoptApplication.hpp>
 #include <IpSolveStatistics.hpp>
-#include <IpTNLP.hpp>
+
+#include "base/ipopt_app.h"
+#include "implicit_sim/core/ncp/ncp_error.h"
 
 namespace implicit_sim {
 namespace {
@@ -16,22 +16,20 @@ namespace {
 using Ipopt::Index;
 using Ipopt::Number;
 
-class StepNlp : public Ipopt::TNLP {
+class PenaltyNlp : public CapturingTnlp {
  public:
-  StepNlp(StepProblem* problem, const Eigen::VectorXd& z0) : problem_(problem), z0_(z0), z_(z0) {
-    const int n = problem->size();
+  PenaltyNlp(const NcpProblem& problem, const Eigen::VectorXd& z0) : CapturingTnlp(z0), problem_(problem), z0_(z0) {
+    raw_mode_.raw = true;
+    const int n = problem.size();
     scale_.assign(n, 0.0);
     for (int i = 0; i < n; ++i) {
       double s;
-      if (problem->IsComplementarityRow(i, &s)) scale_[i] = s;
+      if (problem.IsComplementarityRow(i, &s)) scale_[i] = s;
     }
   }
-  const Eigen::VectorXd& z() const { return z_; }
-  bool finalized() const { return finalized_; }
-  Ipopt::SolverReturn status() const { return status_; }
 
   bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag, IndexStyleEnum& style) override {
-    n = m = problem_->size();
+    n = m = problem_.size();
     Update(n, z0_.data(), true);  // records the sparsity pattern
     nnz_jac_g = static_cast<Index>(jacobian_.matrix.nonZeros());
     nnz_h_lag = 0;      // limited-memory Hessian approximation
@@ -104,18 +102,10 @@ class StepNlp : public Ipopt::TNLP {
     return true;
   }
 
-  void finalize_solution(Ipopt::SolverReturn status, Index n, const Number* x, const Number*, const Number*, Index,
-                         const Number*, const Number*, Number, const Ipopt::IpoptData*,
-                         Ipopt::IpoptCalculatedQuantities*) override {
-    finalized_ = true;
-    status_ = status;
-    z_ = Eigen::Map<const Eigen::VectorXd>(x, n);
-  }
-
  private:
   bool Update(Index n, const Number* x, bool new_x) {
     if (new_x || !evaluated_) {
-      problem_->EvaluateSparse(Eigen::Map<const Eigen::VectorXd>(x, n), &raw_, &jacobian_);
+      problem_.EvaluateSparse(Eigen::Map<const Eigen::VectorXd>(x, n), raw_mode_, &raw_, &jacobian_);
       evaluated_ = true;
     }
     const Eigen::SparseMatrix<double>& J = jacobian_.matrix;
@@ -124,43 +114,49 @@ class StepNlp : public Ipopt::TNLP {
            });
   }
 
-  StepProblem* problem_;
-  Eigen::VectorXd z0_, z_, raw_;
+  const NcpProblem& problem_;
+  NcpEvalMode raw_mode_;
+  Eigen::VectorXd z0_, raw_;
   SparseJacobian jacobian_;  // the pattern is fixed for the solve: every entry is emitted at every evaluation
   std::vector<double> scale_;
-  bool evaluated_ = false, finalized_ = false;
-  Ipopt::SolverReturn status_ = Ipopt::INTERNAL_ERROR;
+  bool evaluated_ = false;
 };
 
 }  // namespace
 
-IpoptNcpResult SolveStepWithIpopt(StepProblem* problem, int max_iterations, Eigen::VectorXd* z) {
-  IpoptNcpResult result;
-  problem->set_raw_complementarity(true);
+NcpSummary SolveNcpWithIpopt(const NcpProblem& problem, const IpoptNcpOptions& options, Eigen::VectorXd* z) {
+  NcpSummary summary;
+  bool solved = false;
   try {
-    Ipopt::SmartPtr<StepNlp> nlp = new StepNlp(problem, *z);
-    Ipopt::SmartPtr<Ipopt::IpoptApplication> app = IpoptApplicationFactory();
-    app->Options()->SetIntegerValue("print_level", 0);
-    app->Options()->SetStringValue("sb", "yes");
-    app->Options()->SetStringValue("hessian_approximation", "limited-memory");
-    app->Options()->SetStringValue("mu_strategy", "adaptive");
-    app->Options()->SetNumericValue("tol", 1e-10);
-    app->Options()->SetNumericValue("acceptable_tol", 1e-8);
-    app->Options()->SetIntegerValue("max_iter", std::max(1, max_iterations));
-    std::istringstream no_option_file("");
-    if (app->Initialize(no_option_file) == Ipopt::Solve_Succeeded) {
-      const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::GetRawPtr(nlp));
-      result.solved = status == Ipopt::Solve_Succeeded || status == Ipopt::Solved_To_Acceptable_Level;
-      if (IsValid(app->Statistics())) result.iterations = app->Statistics()->IterationCount();
-      if (nlp->finalized() && nlp->z().allFinite()) *z = nlp->z();
+    Ipopt::SmartPtr<PenaltyNlp> nlp = new PenaltyNlp(problem, *z);
+    IpoptSettings settings;
+    settings.tol = options.ipopt_tol;
+    settings.acceptable_tol = options.ipopt_acceptable_tol;
+    settings.max_iter = std::max(1, options.max_iterations);
+    settings.limited_memory_hessian = true;
+    const Ipopt::SmartPtr<Ipopt::IpoptApplication> app = MakeQuietIpopt(settings);
+    if (IsValid(app)) {
+      solved = IpoptSolved(app->OptimizeTNLP(Ipopt::GetRawPtr(nlp)));
+      if (IsValid(app->Statistics())) summary.iterations = app->Statistics()->IterationCount();
+      if (nlp->finalized() && nlp->x().allFinite()) *z = nlp->x();
     }
   } catch (const std::exception&) {
-    result.solved = false;
+    solved = false;
   }
-  problem->set_raw_complementarity(false);
-  problem->RawResiduals(*z, &result.equation_residual, &result.complementarity);
-  if (!std::isfinite(result.equation_residual) || !std::isfinite(result.complementarity)) result.solved = false;
-  return result;
+  Eigen::VectorXd raw_rows;
+  const NcpError error = ComputeNcpError(problem, *z, &raw_rows);
+  summary.equation_residual = error.equations;
+  summary.complementarity = error.complementarity;
+  summary.residual = std::max(error.equations, error.complementarity);
+  if (!std::isfinite(error.equations) || !std::isfinite(error.complementarity)) {
+    summary.termination = NcpTermination::kNonFinite;
+  } else if (!solved) {
+    summary.termination = NcpTermination::kSolverFailure;
+  } else {
+    summary.converged = summary.residual <= options.tolerance;
+    summary.termination = summary.converged ? NcpTermination::kConverged : NcpTermination::kInaccurate;
+  }
+  return summary;
 }
 
 }  // namespace implicit_sim

@@ -1,6 +1,6 @@
 #include "implicit_sim/core/ncp/semismooth_newton.h"
 
-#include "implicit_sim/core/base/format.h"
+#include "implicit_sim/core/base/format.h"  // locale-independent numbers in messages
 
 #include <algorithm>
 #include <cmath>
@@ -44,19 +44,17 @@ void SemismoothNewton::Resize(int n) {
   dz_.resize(n);
 }
 
-void SemismoothNewton::Evaluate(StepProblem* problem, const NewtonOptions& options, const Eigen::VectorXd& z,
-                                bool jacobian) {
+void SemismoothNewton::Evaluate(const NcpProblem& problem, const Eigen::VectorXd& z, bool jacobian) {
+  ++summary_->residual_evaluations;
   if (!jacobian) {
-    problem->Evaluate(z, &Phi_, nullptr);
+    problem.Evaluate(z, mode_, &Phi_, nullptr);
     return;
   }
-  problem->set_jacobian_regularization(options.sparse_regularization);
   if (sparse_) {
-    problem->EvaluateSparse(z, &Phi_, &J_sparse_);
+    problem.EvaluateSparse(z, mode_, &Phi_, &J_sparse_);
   } else {
-    problem->Evaluate(z, &Phi_, &J_);
+    problem.Evaluate(z, mode_, &Phi_, &J_);
   }
-  problem->set_jacobian_regularization(0.0);
 }
 
 bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, bool least_squares) {
@@ -83,7 +81,7 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
   }
   const Eigen::SparseMatrix<double>& J = J_sparse_.matrix;
   if (!least_squares) {
-    if (!lu_.Factorize(J, J_sparse_.pattern_version)) return false;
+    if (!lu_.Factorize(J, J_sparse_.pattern_version())) return false;
     dz_ = -Phi_;
     return lu_.Solve(&dz_) && dz_.allFinite();
   }
@@ -96,33 +94,40 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
   return dz_.allFinite();
 }
 
-double SemismoothNewton::LineSearch(StepProblem* problem, const NewtonOptions& options, const Eigen::VectorXd& z,
-                                    double merit) {
+double SemismoothNewton::LineSearch(const NcpProblem& problem, const NewtonOptions& options,
+                                    const Eigen::VectorXd& z, double merit) {
   // Armijo backtracking on the merit 0.5 |Phi|^2; the accepted point is left in z_trial_.
   for (double step = 1.0; step >= options.min_step; step *= 0.5) {
     z_trial_ = z + step * dz_;
-    problem->Evaluate(z_trial_, &Phi_trial_, nullptr);
+    ++summary_->residual_evaluations;
+    problem.Evaluate(z_trial_, mode_, &Phi_trial_, nullptr);
     const double trial_merit = 0.5 * Phi_trial_.squaredNorm();
     if (std::isfinite(trial_merit) && trial_merit <= merit * (1.0 - 2.0 * options.armijo * step)) return step;
   }
   return 0.0;
 }
 
-NewtonResult SemismoothNewton::Solve(StepProblem* problem, const NewtonOptions& options, Eigen::VectorXd* z) {
-  NewtonResult result;
-  Resize(problem->size());
+NcpSummary SemismoothNewton::Solve(const NcpProblem& problem, const NewtonOptions& options, Eigen::VectorXd* z,
+                                   double smoothing) {
+  NcpSummary summary;
+  summary_ = &summary;
+  mode_ = NcpEvalMode();
+  mode_.smoothing = smoothing;
+  mode_.regularization = options.sparse_regularization;  // enters the Jacobian only, never Phi
+  Resize(problem.size());
   if (sparse_) lu_.ForgetPivots();  // a solve depends on its inputs only
-  Evaluate(problem, options, *z, true);
+  Evaluate(problem, *z, true);
   double merit = 0.5 * Phi_.squaredNorm();
   // Relative part: rows such as a1 - a2 - d n carry coordinates, whose rounding error grows with their size.
   const auto tolerance = [&]() { return options.tolerance * (1.0 + z->lpNorm<Eigen::Infinity>()); };
-  for (result.iterations = 0; result.iterations < options.max_iterations; ++result.iterations) {
-    result.residual = std::sqrt(2.0 * merit);
-    if (!std::isfinite(merit)) break;
-    if (result.residual <= tolerance()) {
-      result.converged = true;
-      return result;
+  summary.termination = NcpTermination::kMaxIterations;
+  for (summary.iterations = 0; summary.iterations < options.max_iterations; ++summary.iterations) {
+    summary.residual = std::sqrt(2.0 * merit);
+    if (!std::isfinite(merit)) {
+      summary.termination = NcpTermination::kNonFinite;
+      break;
     }
+    if (summary.residual <= tolerance()) break;
     // The LU direction first; where J is singular, the Levenberg-Marquardt one, a descent direction whenever
     // J^T Phi != 0. In dense mode also where the LU direction does not decrease the merit; in sparse mode that is
     // left to the retry ladder, because J^T J fills in (the 1000-gon's body couples to all its 1000 multipliers).
@@ -130,16 +135,22 @@ NewtonResult SemismoothNewton::Solve(StepProblem* problem, const NewtonOptions& 
     bool accepted = lu_ok && LineSearch(problem, options, *z, merit) > 0.0;
     if (!accepted && (!lu_ok || !sparse_)) {
       ++lm_fallbacks_;
+      ++summary.lm_fallbacks;
       accepted = Direction(options, merit, true) && LineSearch(problem, options, *z, merit) > 0.0;
     }
-    if (!accepted) break;  // no decrease: stalled (Phi_ still belongs to *z)
+    if (!accepted) {  // no decrease: stalled (Phi_ still belongs to *z)
+      summary.termination = NcpTermination::kNoDescent;
+      break;
+    }
     z->swap(z_trial_);
-    Evaluate(problem, options, *z, true);
+    Evaluate(problem, *z, true);
     merit = 0.5 * Phi_.squaredNorm();
   }
-  result.residual = std::sqrt(2.0 * merit);
-  result.converged = std::isfinite(merit) && result.residual <= tolerance();
-  return result;
+  summary.residual = std::sqrt(2.0 * merit);
+  summary.converged = std::isfinite(merit) && summary.residual <= tolerance();
+  if (summary.converged) summary.termination = NcpTermination::kConverged;
+  summary_ = nullptr;
+  return summary;
 }
 
 }  // namespace implicit_sim

@@ -16,6 +16,7 @@ Data::Data(const Model& model, PairSelection selection)
       z(Eigen::VectorXd::Zero(problem.size())),
       z_start(Eigen::VectorXd::Zero(problem.size())),
       z_best(Eigen::VectorXd::Zero(problem.size())),
+      ncp_error_rows(Eigen::VectorXd::Zero(problem.size())),
       z_backup(kMaxSubstepDepth + 1, Eigen::VectorXd::Zero(problem.size())),
       pairs_backup(kMaxSubstepDepth + 1),
       X_WB(model.bodies.size(), Pose::Identity()),
@@ -30,6 +31,7 @@ void Data::LayOut(const std::vector<int>& pairs_in_ncp, const Eigen::VectorXd* z
   problem.SetActivePairs(pairs_in_ncp, z_old, &z_remap, &new_blocks);
   z_start.resize(problem.size());
   z_best.resize(problem.size());
+  ncp_error_rows.resize(problem.size());
 }
 
 void SaveWarmStart(const Data& data, WarmStart* out) {

@@ -67,8 +67,8 @@ void StepProblem::SeedJoints(Eigen::VectorXd* z) const {
 
 // row += scale * dC/dz for a function C of the end-of-step poses with gradient g: dp = h dv, dtheta = h J_l(h w) dw.
 void StepProblem::AddEndGradientRow(int row, const JointGradient& g, const BodyEnd& eP, const BodyEnd& eC,
-                                    double scale) {
-  if (!J_dense_ && !J_sparse_) return;
+                                    double scale) const {
+  if (!WantJacobian()) return;
   if (eP.col >= 0) {
     AddJ(row, eP.col, Eigen::RowVector3d(scale * h_ * g.dp_P.transpose()));
     AddJ(row, eP.col + 3, Eigen::RowVector3d(scale * g.dth_P.transpose() * eP.dtheta_dw));
@@ -78,8 +78,8 @@ void StepProblem::AddEndGradientRow(int row, const JointGradient& g, const BodyE
 }
 
 // row += scale * d(g . nu)/dz (a rate along the start-of-step gradient g: linear in the velocities).
-void StepProblem::AddRateRow(int row, const JointGradient& g, const BodyEnd& eP, const BodyEnd& eC, double scale) {
-  if (!J_dense_ && !J_sparse_) return;
+void StepProblem::AddRateRow(int row, const JointGradient& g, const BodyEnd& eP, const BodyEnd& eC, double scale) const {
+  if (!WantJacobian()) return;
   if (eP.col >= 0) {
     AddJ(row, eP.col, Eigen::RowVector3d(scale * g.dp_P.transpose()));
     AddJ(row, eP.col + 3, Eigen::RowVector3d(scale * g.dth_P.transpose()));
@@ -90,9 +90,9 @@ void StepProblem::AddRateRow(int row, const JointGradient& g, const BodyEnd& eP,
 
 // Body rows -= g * force / Fs (the generalized force along g) and their Jacobian column `col` -= g * dforce_dcol / Fs.
 void StepProblem::AddJointForce(const JointGradient& g, double force, int col, double dforce_dcol, const BodyEnd& eP,
-                                const BodyEnd& eC, Eigen::VectorXd* Phi) {
+                                const BodyEnd& eC, Eigen::VectorXd* Phi) const {
   const double s = 1.0 / force_scale_;
-  const bool want_J = (J_dense_ || J_sparse_) && col >= 0;
+  const bool want_J = (WantJacobian()) && col >= 0;
   if (eP.col >= 0) {
     Phi->segment<3>(eP.col) -= s * force * g.dp_P;
     Phi->segment<3>(eP.col + 3) -= s * force * g.dth_P;
@@ -109,7 +109,7 @@ void StepProblem::AddJointForce(const JointGradient& g, double force, int col, d
   }
 }
 
-void StepProblem::AddJointRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
+void StepProblem::AddJointRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const {
   for (size_t j = 0; j < model_.joints.size(); ++j) {
     const Joint& joint = model_.joints[j];
     const int o = joint_offset_[j], m = joint.num_equalities();
@@ -133,17 +133,17 @@ void StepProblem::AddJointRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
 
 // 0 <= l_lo _|_ q - lower >= 0 and 0 <= l_hi _|_ upper - q >= 0 at rows col, col + 1; q at the end of the step.
 void StepProblem::AddJointLimitRows(const Joint& joint, int col, const Eigen::VectorXd& z, const BodyEnd& eP,
-                                    const BodyEnd& eC, const JointGradient& G_q, Eigen::VectorXd* Phi) {
+                                    const BodyEnd& eC, const JointGradient& G_q, Eigen::VectorXd* Phi) const {
   const double Fs = force_scale_;
   JointGradient g;
   const double q = JointPosition(joint, MakePose(eP.p, eP.R), MakePose(eC.p, eC.R), &g);
-  const FB lo = FischerBurmeister(z[col] / Fs, q - joint.lower, smoothing_, raw_);
-  const FB hi = FischerBurmeister(z[col + 1] / Fs, joint.upper - q, smoothing_, raw_);
+  const FB lo = FischerBurmeister(z[col] / Fs, q - joint.lower, eval_.mode.smoothing, eval_.mode.raw);
+  const FB hi = FischerBurmeister(z[col + 1] / Fs, joint.upper - q, eval_.mode.smoothing, eval_.mode.raw);
   (*Phi)[col] = lo.value;
   (*Phi)[col + 1] = hi.value;
-  if (J_dense_ || J_sparse_) {
-    AddJ(col, col, (lo.da + regularization_) / Fs);
-    AddJ(col + 1, col + 1, (hi.da + regularization_) / Fs);
+  if (WantJacobian()) {
+    AddJ(col, col, (lo.da + eval_.mode.regularization) / Fs);
+    AddJ(col + 1, col + 1, (hi.da + eval_.mode.regularization) / Fs);
   }
   AddEndGradientRow(col, g, eP, eC, lo.db);
   AddEndGradientRow(col + 1, g, eP, eC, -hi.db);
@@ -153,14 +153,14 @@ void StepProblem::AddJointLimitRows(const Joint& joint, int col, const Eigen::Ve
 
 // Coulomb joint friction at rows col, col + 1: qdot + s sigma = 0 and 0 <= sigma _|_ 1 - s^2 >= 0; force F_c s.
 void StepProblem::AddJointFrictionRows(const Joint& joint, int col, const Eigen::VectorXd& z, const BodyEnd& eP,
-                                       const BodyEnd& eC, const JointGradient& G_q, Eigen::VectorXd* Phi) {
+                                       const BodyEnd& eC, const JointGradient& G_q, Eigen::VectorXd* Phi) const {
   const double s = z[col], sigma = z[col + 1];
   (*Phi)[col] = G_q.Rate(eP.v, eP.w, eC.v, eC.w) + s * sigma;  // the end-of-step joint velocity (rad/s or m/s)
   AddRateRow(col, G_q, eP, eC, 1.0);
-  const FB fb = FischerBurmeister(sigma, 1.0 - s * s, smoothing_, raw_);
+  const FB fb = FischerBurmeister(sigma, 1.0 - s * s, eval_.mode.smoothing, eval_.mode.raw);
   (*Phi)[col + 1] = fb.value;
-  if (J_dense_ || J_sparse_) {
-    AddJ(col, col, sigma + regularization_);
+  if (WantJacobian()) {
+    AddJ(col, col, sigma + eval_.mode.regularization);
     AddJ(col, col + 1, s);
     AddJ(col + 1, col + 1, fb.da);
     AddJ(col + 1, col, -2.0 * fb.db * s);
@@ -170,9 +170,9 @@ void StepProblem::AddJointFrictionRows(const Joint& joint, int col, const Eigen:
 
 // Viscous damping -c qdot along G_q, implicit in the end-of-step velocities.
 void StepProblem::AddJointDamping(const Joint& joint, const BodyEnd& eP, const BodyEnd& eC, const JointGradient& G_q,
-                                  Eigen::VectorXd* Phi) {
+                                  Eigen::VectorXd* Phi) const {
   AddJointForce(G_q, -joint.damping * G_q.Rate(eP.v, eP.w, eC.v, eC.w), -1, 0.0, eP, eC, Phi);
-  if (!J_dense_ && !J_sparse_) return;
+  if (!WantJacobian()) return;
   // Body rows of P and C: + (c / Fs) G_q G_q^T over the velocity columns of P and C, in 3 x 3 blocks.
   const double k = joint.damping / force_scale_;
   const Vec3 gP[2] = {G_q.dp_P, G_q.dth_P}, gC[2] = {G_q.dp_C, G_q.dth_C};

@@ -3,34 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
-#include "implicit_sim/core/ncp/fischer_burmeister.h"
+#include "contact_frame.h"
 #include "implicit_sim/core/base/rotation.h"
+#include "implicit_sim/core/ncp/fischer_burmeister.h"
 #include "implicit_sim/core/step/data.h"
 
 namespace implicit_sim {
 namespace pi = pair_index;
-namespace {
-
-// Tangent basis (t, o) from the normal n and a reference axis e fixed for the step (DESIGN.md pitfall 3):
-// t = (e - (e.n) n) / |e - (e.n) n|, o = n x t, with their derivatives with respect to n.
-void TangentBasis(const Vec3& n, const Vec3& e, Vec3* t, Vec3* o, Mat3* dt_dn, Mat3* do_dn) {
-  const Vec3 u = e - e.dot(n) * n;
-  const double len = u.norm();
-  *t = u / len;
-  *o = n.cross(*t);
-  const Mat3 du_dn = -e.dot(n) * Mat3::Identity() - n * e.transpose();
-  *dt_dn = (Mat3::Identity() - (*t) * t->transpose()) / len * du_dn;
-  *do_dn = -Skew(*t) + Skew(n) * (*dt_dn);
-}
-
-Vec3 LeastAlignedAxis(const Vec3& n) {
-  int axis;
-  n.cwiseAbs().minCoeff(&axis);
-  return Vec3::Unit(axis);
-}
-
-}  // namespace
-
 StepProblem::StepProblem(const Model& model, bool all_pairs)
     : model_(model), start_(model.bodies.size()), end_(model.bodies.size()), force_scale_(model.ForceScale()) {
   external_wrench_W_ = Eigen::VectorXd::Zero(6 * model.num_moving());
@@ -70,7 +49,6 @@ void StepProblem::SetActivePairs(const std::vector<int>& pairs, const Eigen::Vec
     size_ += block.size();
   }
   tangent_axis_.assign(blocks_.size(), Vec3::UnitX());
-  raw_scratch_ = Eigen::VectorXd::Zero(size_);
   complementarity_kind_.assign(size_, 0);
   for (size_t j = 0; j < model_.joints.size(); ++j) {
     const Joint& joint = model_.joints[j];
@@ -109,8 +87,8 @@ bool StepProblem::IsComplementarityRow(int row, double* scale) const {
   return complementarity_kind_[row] != 0;
 }
 
-void StepProblem::BeginStep(const Model& model, const State& start, double h,
-                            const Eigen::VectorXd* external_wrench_W) {
+void StepProblem::BeginStep(const State& start, double h, const Eigen::VectorXd* external_wrench_W) {
+  const Model& model = model_;
   h_ = h;
   force_scale_ = model.ForceScale();
   if (external_wrench_W) {
@@ -135,70 +113,7 @@ void StepProblem::BeginStep(const Model& model, const State& start, double h,
   BeginJoints();
 }
 
-void StepProblem::ResetTangentAxes(const Eigen::VectorXd& z) {
-  for (size_t c = 0; c < blocks_.size(); ++c) ResetTangentAxis(static_cast<int>(c), z);
-}
-
-void StepProblem::ResetTangentAxis(int c, const Eigen::VectorXd& z) {
-  tangent_axis_[c] = LeastAlignedAxis(z.segment<3>(blocks_[c].offset + pi::kN));
-}
-
-void StepProblem::UpdateTangentAxes(Eigen::VectorXd* z) {
-  for (size_t c = 0; c < blocks_.size(); ++c) {
-    const int off = blocks_[c].offset;
-    const Vec3 n = z->segment<3>(off + pi::kN);
-    if (std::abs(tangent_axis_[c].dot(n)) < 0.9 * n.norm()) continue;
-    const FrictionParams& fr = model_.pairs[blocks_[c].pair].friction;
-    Vec3 t, o;
-    Mat3 dt_dn, do_dn;
-    TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
-    // -v_tangential / sigma, independent of the basis.
-    const Vec3 slip_dir = (*z)[off + pi::kSt] / fr.e_t * t + (*z)[off + pi::kSo] / fr.e_o * o;
-    tangent_axis_[c] = LeastAlignedAxis(n);
-    TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
-    (*z)[off + pi::kSt] = fr.e_t * slip_dir.dot(t);
-    (*z)[off + pi::kSo] = fr.e_o * slip_dir.dot(o);
-  }
-}
-
-void StepProblem::PredictClosestPoints(Eigen::VectorXd* z) const {
-  for (size_t c = 0; c < blocks_.size(); ++c) {
-    const ContactPair& pair = model_.pairs[blocks_[c].pair];
-    const int off = blocks_[c].offset;
-    for (const auto& [body, column] : {std::make_pair(pair.body1, off + pi::kA1), std::make_pair(pair.body2, off + pi::kA2)}) {
-      z->segment<3>(column) += h_ * start_[body].v0;
-    }
-    const Vec3 n = z->segment<3>(off + pi::kN);
-    (*z)[off + pi::kD] = n.dot(z->segment<3>(off + pi::kA1) - z->segment<3>(off + pi::kA2));
-  }
-}
-
-void StepProblem::SeedFriction(Eigen::VectorXd* z) const {
-  for (size_t c = 0; c < blocks_.size(); ++c) SeedFriction(static_cast<int>(c), z);
-}
-
-void StepProblem::SeedFriction(int c, Eigen::VectorXd* z) const {
-  const ContactPair& pair = model_.pairs[blocks_[c].pair];
-  const FrictionParams& fr = pair.friction;
-  const PairBlock& blk = blocks_[c];
-  const int off = blk.offset;
-  const BodyStep& s1 = start_[pair.body1];
-  const BodyStep& s2 = start_[pair.body2];
-  const Vec3 n = z->segment<3>(off + pi::kN).normalized();
-  const Vec3 v_rel = (s1.v0 + s1.w0.cross(z->segment<3>(off + pi::kA1) - s1.p0)) -
-                     (s2.v0 + s2.w0.cross(z->segment<3>(off + pi::kA2) - s2.p0));
-  Vec3 t, o;
-  Mat3 dt_dn, do_dn;
-  TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
-  const Vec3 slip(fr.e_t * t.dot(v_rel), fr.e_o * o.dot(v_rel), fr.e_r * n.dot(s1.w0 - s2.w0));
-  const double sigma = slip.norm();
-  z->segment<3>(off + pi::kSt) = sigma > 1e-9 ? Vec3(-slip / sigma) : Vec3::Zero();
-  // No slip yet: sigma = 0, s = 0 would be a saddle of the merit function, so start from sigma > 0 (the rows
-  // e (t.v_rel) + s sigma then determine s, and sigma moves to the slip speed or to 0 when the contact sticks).
-  (*z)[blk.sigma()] = sigma > 1e-9 ? sigma : 1e-3;
-}
-
-void StepProblem::UpdateBodies(const Eigen::VectorXd& z) {
+void StepProblem::UpdateBodies(const Eigen::VectorXd& z) const {
   for (size_t b = 0; b < end_.size(); ++b) {
     BodyEnd& e = end_[b];
     const BodyStep& s = start_[b];
@@ -209,8 +124,7 @@ void StepProblem::UpdateBodies(const Eigen::VectorXd& z) {
     }
     e.v = z.segment<3>(e.col);
     e.w = z.segment<3>(e.col + 3);
-    e.p = s.p0 + h_ * e.v;                      // paper eq. 2, Euler step of the position
-    e.R = ExpSO3(h_ * e.w) * s.R0;              // and of the orientation, on SO(3)
+    EndOfStepPose(s.p0, s.R0, e.v, e.w, h_, &e.p, &e.R);  // paper eq. 2
     e.dtheta_dw = h_ * LeftJacobianSO3(h_ * e.w);
   }
 }
@@ -219,8 +133,14 @@ Pose StepProblem::EndPose(int body, const Eigen::VectorXd& z) const {
   const BodyStep& s = start_[body];
   Pose X = Pose::Identity();
   const int col = end_[body].col;
-  X.translation() = col < 0 ? s.p0 : Vec3(s.p0 + h_ * z.segment<3>(col));
-  X.linear() = col < 0 ? s.R0 : Mat3(ExpSO3(h_ * z.segment<3>(col + 3)) * s.R0);
+  X.translation() = s.p0;
+  X.linear() = s.R0;
+  if (col < 0) return X;
+  Vec3 p;
+  Mat3 R;
+  EndOfStepPose(s.p0, s.R0, z.segment<3>(col), z.segment<3>(col + 3), h_, &p, &R);  // paper eq. 2
+  X.translation() = p;
+  X.linear() = R;
   return X;
 }
 
@@ -239,30 +159,30 @@ StepProblem::Eval StepProblem::EvaluateInequality(int body, int k, const Vec3& p
 }
 
 template <typename Block>
-void StepProblem::AddJ(int row, int col, const Block& block) {
-  if (J_dense_) {  // rows of locked velocities are overwritten at the end of EvaluateAll
-    J_dense_->block(row, col, block.rows(), block.cols()) += block;
-  } else if (J_sparse_) {
+void StepProblem::AddJ(int row, int col, const Block& block) const {
+  if (eval_.J_dense) {  // rows of locked velocities are overwritten at the end of EvaluateAll
+    eval_.J_dense->block(row, col, block.rows(), block.cols()) += block;
+  } else if (eval_.J_sparse) {
     for (int j = 0; j < block.cols(); ++j) {
       for (int i = 0; i < block.rows(); ++i) AddJ(row + i, col + j, static_cast<double>(block(i, j)));
     }
   }
 }
 
-void StepProblem::AddJ(int row, int col, double value) {
-  if (J_dense_) {
-    (*J_dense_)(row, col) += value;
-  } else if (J_sparse_) {
-    if (row < static_cast<int>(locked_row_.size()) && locked_row_[row]) return;  // the pattern leaves them out
-    if (J_sparse_->recording) {
-      J_sparse_->recorded.emplace_back(row, col, value);
-    } else {
-      J_sparse_->matrix.valuePtr()[J_sparse_->slot[J_sparse_->cursor++]] += value;
-    }
+void StepProblem::AddJ(int row, int col, double value) const {
+  if (eval_.J_sparse && row < static_cast<int>(locked_row_.size()) && locked_row_[row]) return;  // left out
+  AddJUnlocked(row, col, value);
+}
+
+void StepProblem::AddJUnlocked(int row, int col, double value) const {
+  if (eval_.J_dense) {
+    (*eval_.J_dense)(row, col) += value;
+  } else if (eval_.J_sparse) {
+    eval_.J_sparse->Add(row, col, value);
   }
 }
 
-void StepProblem::EvaluateAll(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
+void StepProblem::EvaluateAll(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const {
   UpdateBodies(z);
   Phi->setZero(size_);
   AddBodyRows(z, Phi);
@@ -272,50 +192,30 @@ void StepProblem::EvaluateAll(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
   for (int row = 0; row < static_cast<int>(locked_row_.size()); ++row) {
     if (!locked_row_[row]) continue;
     (*Phi)[row] = z[row];
-    if (J_dense_) J_dense_->row(row).setZero();
-    locked_row_[row] = 0;
-    AddJ(row, row, 1.0);
-    locked_row_[row] = 1;
+    if (eval_.J_dense) eval_.J_dense->row(row).setZero();
+    AddJUnlocked(row, row, 1.0);
   }
 }
 
-void StepProblem::Evaluate(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J) {
+void StepProblem::Evaluate(const Eigen::VectorXd& z, const NcpEvalMode& mode, Eigen::VectorXd* Phi,
+                           Eigen::MatrixXd* J) const {
   if (J) J->setZero(size_, size_);
-  J_dense_ = J;
-  J_sparse_ = nullptr;
+  eval_ = {mode, J, nullptr};
   EvaluateAll(z, Phi);
-  J_dense_ = nullptr;
+  eval_ = EvalContext();
 }
 
-void StepProblem::EvaluateSparse(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, SparseJacobian* J) {
-  J_dense_ = nullptr;
-  J_sparse_ = J;
-  if (J) {
-    J->recording = J->pattern_version != pattern_version_;
-    J->recorded.clear();
-    J->cursor = 0;
-    if (!J->recording) std::fill(J->matrix.valuePtr(), J->matrix.valuePtr() + J->matrix.nonZeros(), 0.0);
-  }
+void StepProblem::EvaluateSparse(const Eigen::VectorXd& z, const NcpEvalMode& mode, Eigen::VectorXd* Phi,
+                                 SparseJacobian* J) const {
+  if (J) J->Begin(pattern_version_);
+  eval_ = {mode, nullptr, J};
   EvaluateAll(z, Phi);
-  J_sparse_ = nullptr;
-  if (!J || !J->recording) return;
-  // First evaluation for this layout: build the pattern (duplicates summed) and each emitted entry's slot in it.
-  J->matrix.resize(size_, size_);
-  J->matrix.setFromTriplets(J->recorded.begin(), J->recorded.end());
-  J->matrix.makeCompressed();
-  J->slot.resize(J->recorded.size());
-  for (size_t k = 0; k < J->recorded.size(); ++k) {
-    const int col = J->recorded[k].col();
-    const int* begin = J->matrix.innerIndexPtr() + J->matrix.outerIndexPtr()[col];
-    const int* end = J->matrix.innerIndexPtr() + J->matrix.outerIndexPtr()[col + 1];
-    J->slot[k] = static_cast<int>(std::lower_bound(begin, end, J->recorded[k].row()) - J->matrix.innerIndexPtr());
-  }
-  J->pattern_version = pattern_version_;
-  J->recording = false;
+  eval_ = EvalContext();
+  if (J) J->Finish(size_);
 }
 
 // Newton-Euler in impulse form divided by h (paper eq. 1 discretized): force units, scaled by 1/Fs.
-void StepProblem::AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
+void StepProblem::AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const {
   const double Fs = force_scale_;
   for (int k = 0; k < model_.num_moving(); ++k) {
     const int b = model_.moving_bodies[k];
@@ -340,7 +240,7 @@ void StepProblem::AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
 
 // Adds -sign * (F, r x F + lr n) / Fs to the body rows of `body` (sign +1 for body 1, -1 for body 2).
 void StepProblem::AddContactWrench(int c, int body, double sign, const Vec3& r, const ContactWrench& w,
-                                   Eigen::VectorXd* Phi) {
+                                   Eigen::VectorXd* Phi) const {
   const BodyEnd& e = end_[body];
   if (e.col < 0) return;
   const PairBlock& blk = blocks_[c];
@@ -349,7 +249,7 @@ void StepProblem::AddContactWrench(int c, int body, double sign, const Vec3& r, 
   const double s = sign / force_scale_;
   Phi->segment<3>(row) -= s * w.F;
   Phi->segment<3>(row + 3) -= s * (r.cross(w.F) + w.lr * w.n);
-  if (!J_dense_ && !J_sparse_) return;
+  if (!WantJacobian()) return;
   const Mat3 rx = Skew(r), Fx = Skew(w.F);
   AddJ(row, off + pi::kN, Mat3(-(s * w.dF_dn)));
   AddJ(row, blk.ln(), Vec3(-(s * w.dF_dln)));
@@ -364,7 +264,7 @@ void StepProblem::AddContactWrench(int c, int body, double sign, const Vec3& r, 
   AddJ(row + 3, off + pi::kSr, Vec3(-(s * w.dlr_dsr * w.n)));
 }
 
-void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi) {
+void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const {
   const ContactPair& pair = model_.pairs[blocks_[c].pair];
   const FrictionParams& fr = pair.friction;
   const PairBlock& blk = blocks_[c];
@@ -376,7 +276,7 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
   const BodyEnd& e2 = end_[pair.body2];
   const Vec3 r1 = a1 - e1.p, r2 = a2 - e2.p;
   const Mat3 I3 = Mat3::Identity();
-  const bool want_J = J_dense_ || J_sparse_;
+  const bool want_J = WantJacobian();
   auto add = [this, want_J](int row, int col, const auto& block) {
     if (want_J) AddJ(row, col, block);
   };
@@ -410,7 +310,7 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
       Phi->segment<3>(side.rows) -= mult * ev.g;
       add(side.rows, side.mult_col + k, -ev.g);
       add(side.rows, side.a_col, -mult * ev.H);
-      const FB fb = FischerBurmeister(mult, -ev.f, smoothing_, raw_);
+      const FB fb = FischerBurmeister(mult, -ev.f, eval_.mode.smoothing, eval_.mode.raw);
       const int fb_row = side.mult_col + k;
       (*Phi)[fb_row] = fb.value;
       add1(fb_row, side.mult_col + k, fb.da);
@@ -435,7 +335,7 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
   Vec3 t, o;
   Mat3 dt_dn, do_dn;
   TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
-  const Vec3 v_rel = (e1.v + e1.w.cross(r1)) - (e2.v + e2.w.cross(r2));
+  const Vec3 v_rel = RelativeVelocity(e1.v, e1.w, r1, e2.v, e2.w, r2);
   const Vec3 w_rel = e1.w - e2.w;
   // Adds coeff * u^T d(v_rel)/d(unknowns) to `row`.
   auto add_rel_velocity = [&](int row, double coeff, const Vec3& u) {
@@ -469,9 +369,9 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
     if (e1.col >= 0) add(rr, e1.col + 3, Eigen::RowVector3d(fr.e_r * n.transpose()));
     if (e2.col >= 0) add(rr, e2.col + 3, Eigen::RowVector3d(-fr.e_r * n.transpose()));
     // The diagonal entries carry the sparse solver's proximal regularization (never Phi).
-    add1(rt, off + pi::kSt, sigma_eff + regularization_);
-    add1(ro, off + pi::kSo, sigma_eff + regularization_);
-    add1(rr, off + pi::kSr, sigma_eff + regularization_);
+    add1(rt, off + pi::kSt, sigma_eff + eval_.mode.regularization);
+    add1(ro, off + pi::kSo, sigma_eff + eval_.mode.regularization);
+    add1(rr, off + pi::kSr, sigma_eff + eval_.mode.regularization);
     add1(rt, blk.sigma(), st);
     add1(ro, blk.sigma(), so);
     add1(rr, blk.sigma(), sr);
@@ -482,13 +382,13 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
 
   // Non-penetration (paper eq. 11 with the signed distance d as gap): ln / Fs _|_ d.
   const double Fs = force_scale_;
-  const FB fb_n = FischerBurmeister(ln / Fs, d, smoothing_, raw_);
+  const FB fb_n = FischerBurmeister(ln / Fs, d, eval_.mode.smoothing, eval_.mode.raw);
   (*Phi)[blk.ln()] = fb_n.value;
-  add1(blk.ln(), blk.ln(), (fb_n.da + regularization_) / Fs);
+  add1(blk.ln(), blk.ln(), (fb_n.da + eval_.mode.regularization) / Fs);
   add1(blk.ln(), off + pi::kD, fb_n.db);
 
   // Friction ellipsoid (paper eq. 5 divided by (mu ln)^2): sigma _|_ 1 - s_t^2 - s_o^2 - s_r^2.
-  const FB fb_s = FischerBurmeister(sigma, 1.0 - st * st - so * so - sr * sr, smoothing_, raw_);
+  const FB fb_s = FischerBurmeister(sigma, 1.0 - st * st - so * so - sr * sr, eval_.mode.smoothing, eval_.mode.raw);
   (*Phi)[blk.sigma()] = fb_s.value;
   add1(blk.sigma(), blk.sigma(), fb_s.da);
   add1(blk.sigma(), off + pi::kSt, -2.0 * fb_s.db * st);
@@ -513,29 +413,7 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
   AddContactWrench(c, pair.body2, -1.0, r2, w, Phi);
 }
 
-void StepProblem::RawResiduals(const Eigen::VectorXd& z, double* equations, double* complementarity) {
-  const bool raw = raw_;
-  raw_ = true;  // complementarity rows give b(z); the variable side a is scale * z[i]
-  Evaluate(z, &raw_scratch_, nullptr);
-  raw_ = raw;
-  *equations = *complementarity = 0.0;
-  for (int i = 0; i < size_; ++i) {
-    double scale;
-    if (IsComplementarityRow(i, &scale)) {
-      *complementarity = std::max(*complementarity, std::abs(std::min(scale * z[i], raw_scratch_[i])));
-    } else {
-      *equations = std::max(*equations, std::abs(raw_scratch_[i]));
-    }
-  }
-}
-
-double StepProblem::ComplementarityError(const Eigen::VectorXd& z) {
-  double equations, complementarity;
-  RawResiduals(z, &equations, &complementarity);
-  return complementarity;
-}
-
-void StepProblem::Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>* contacts) {
+void StepProblem::Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>* contacts) const {
   UpdateBodies(z);
   contacts->resize(blocks_.size());
   for (size_t c = 0; c < blocks_.size(); ++c) {
@@ -558,7 +436,7 @@ void StepProblem::Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>*
     out.torsional_moment = mu_ln * fr.e_r * z[off + pi::kSr];
     const BodyEnd& e1 = end_[pair.body1];
     const BodyEnd& e2 = end_[pair.body2];
-    const Vec3 v_rel = (e1.v + e1.w.cross(out.p_WA1 - e1.p)) - (e2.v + e2.w.cross(out.p_WA2 - e2.p));
+    const Vec3 v_rel = RelativeVelocity(e1.v, e1.w, out.p_WA1 - e1.p, e2.v, e2.w, out.p_WA2 - e2.p);
     out.slip_speed = (v_rel - v_rel.dot(out.n_W) * out.n_W).norm();
   }
 }

@@ -1,88 +1,43 @@
+// The step as a pipeline (paper Sections III-IV):
+//   1. check the inputs, and on a cold step that no two bodies overlap (step_health.h);
+//   2. start-of-step kinematics: poses, velocities and world inertia at t (StepProblem::BeginStep);
+//   3. candidate pairs: all of them, or the broad phase over bounding spheres grown by the motion within the step;
+//   4. the step NCP (paper eq. 10-11 with the kinematic map eq. 2 and the closest-point conditions eq. 19-22) solved
+//      through the retry ladder (retry_ladder.h); with the broad phase, pairs found overlapping at the step end are
+//      added and the step solved again;
+//   5. a failed solve splits the step into halves, down to h / 2^Data::kMaxSubstepDepth;
+//   6. the end-of-step state (paper eq. 2), contact results, health check of the velocities (step_health.h).
 #include "implicit_sim/core/step/time_stepper.h"
 
 #include <algorithm>
 #include <chrono>
-#include <iterator>
 #include <cmath>
+#include <iterator>
 #include <stdexcept>
 
-#include "implicit_sim/core/ncp/ipopt_ncp.h"
 #include "implicit_sim/core/model/joints.h"
-#include "implicit_sim/core/base/format.h"
+#include "implicit_sim/core/ncp/ncp_error.h"
+#include "implicit_sim/core/step/retry_ladder.h"
+#include "implicit_sim/core/step/seeding.h"
 #include "implicit_sim/core/step/step_health.h"
-#include "implicit_sim/core/geometry/support.h"
 
 namespace implicit_sim {
-namespace pi = pair_index;
-
-const char* StepFaultName(StepFault fault) {
-  switch (fault) {
-    case StepFault::kNone: return "none";
-    case StepFault::kNotConverged: return "not_converged";
-    case StepFault::kNoFiniteSolution: return "no_finite_solution";
-    case StepFault::kInitialOverlap: return "initial_overlap";
-    case StepFault::kDiverged: return "diverged";
-  }
-  return "unknown";
-}
-
 namespace {
 
+// The state at the end of the step from the solution z: the poses of paper eq. 2, the velocities of z. Quaternion
+// signs follow the previous ones, so q is continuous in time.
 void WriteState(const Model& model, const StepProblem& problem, const Eigen::VectorXd& z, double h, State* state) {
   for (int k = 0; k < model.num_moving(); ++k) {
     const Pose X = problem.EndPose(model.moving_bodies[k], z);
     Eigen::Quaterniond quat(X.linear());
-    const Eigen::Vector4d old = state->q.segment<4>(7 * k + 3);
+    const int iq = Model::q_offset(k), iv = Model::v_offset(k);
+    const Eigen::Vector4d old = state->q.segment<4>(iq + 3);
     if (quat.w() * old[0] + quat.x() * old[1] + quat.y() * old[2] + quat.z() * old[3] < 0.0) quat.coeffs() *= -1.0;
-    state->q.segment<3>(7 * k) = X.translation();
-    state->q.segment<4>(7 * k + 3) << quat.w(), quat.x(), quat.y(), quat.z();
-    state->v.segment<6>(6 * k) = z.segment<6>(6 * k);
+    state->q.segment<3>(iq) = X.translation();
+    state->q.segment<4>(iq + 3) << quat.w(), quat.x(), quat.y(), quat.z();
+    state->v.segment<6>(iv) = z.segment<6>(iv);
   }
   state->t += h;
-}
-
-// Fills the contact block of pair c in z from closest points at the configuration `state` (closed form, or the
-// distance oracle) for a cold start, with multipliers consistent with the normal and a normal force guess.
-// Closest points without the oracle, for a pair entering the NCP through the broad phase (apart by about the
-// margin): the closed form where there is one, otherwise the support points of both bodies along the line of their
-// shape origins (exact for spheres, a fair guess for convex bodies near each other).
-ClosestPointsResult QuickClosestPoints(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2,
-                                       const Pose& X_WB2) {
-  ClosestPointsResult cp;
-  if (ClosedFormClosestPoints(shape1, X_WB1, shape2, X_WB2, &cp)) return cp;
-  const Vec3 u = ((X_WB1 * shape1.X_BS).translation() - (X_WB2 * shape2.X_BS).translation()).normalized();
-  cp.solved = u.allFinite() && SupportPoint(shape1, X_WB1, -u, &cp.p_W1) && SupportPoint(shape2, X_WB2, u, &cp.p_W2);
-  if (cp.solved) cp.distance = std::max(0.0, u.dot(cp.p_W1 - cp.p_W2));
-  return cp;
-}
-
-void SeedPair(const Model& model, const State& state, int c, const StepProblem& problem, Eigen::VectorXd* z,
-              bool use_oracle = true) {
-  const PairBlock& blk = problem.blocks()[c];
-  const ContactPair& pair = model.pairs[blk.pair];
-  const Body& body1 = model.bodies[pair.body1];
-  const Body& body2 = model.bodies[pair.body2];
-  const Pose X_WB1 = state.X_WB(model, pair.body1), X_WB2 = state.X_WB(model, pair.body2);
-  const ClosestPointsResult cp = use_oracle ? FindClosestPoints(body1.shape, X_WB1, body2.shape, X_WB2)
-                                            : QuickClosestPoints(body1.shape, X_WB1, body2.shape, X_WB2);
-  Vec3 p1 = cp.p_W1, p2 = cp.p_W2;
-  if (!cp.solved || !p1.allFinite() || !p2.allFinite()) {  // fall back to the body origins
-    p1 = X_WB1.translation();
-    p2 = X_WB2.translation();
-  }
-  Vec3 n;
-  double grad2 = 1.0;
-  MostActiveInequality(body2.shape, X_WB2, p2, &n, &grad2);
-  if (cp.distance > 1e-9) n = (p1 - p2).normalized();  // separated: along the closest points
-  z->segment(blk.offset, blk.size()).setZero();
-  z->segment<3>(blk.offset + pi::kA1) = p1;
-  z->segment<3>(blk.offset + pi::kA2) = p2;
-  z->segment<3>(blk.offset + pi::kN) = n;
-  (*z)[blk.offset + pi::kD] = n.dot(p1 - p2);
-  // -n = sum alpha grad f(a1), n = sum beta grad g(a2): every active inequality's multiplier (edges, corners, rims).
-  SeedNormalConeMultipliers(body1.shape, X_WB1, p1, -n, z->data() + blk.offset + pi::kAlpha);
-  SeedNormalConeMultipliers(body2.shape, X_WB2, p2, n, z->data() + blk.beta());
-  (*z)[blk.ln()] = cp.distance < 1e-6 ? 0.5 * problem.force_scale() : 0.0;
 }
 
 // Lays the problem out for `pairs`, carrying z over; the blocks of new pairs are seeded from `state` like a cold start.
@@ -135,98 +90,6 @@ int CheckLeftOutPairs(const Model& model, Data* data) {
   return missing;
 }
 
-// One solve of the step NCP of length h from `state`, climbing the ladder while it fails: warm start, cold start
-// (closed-form or oracle closest points), smoothing continuation, Ipopt then a Newton polish. Leaves the best
-// solution in data->z; does not touch the state. With the Ipopt solver: warm start, then cold start, both by Ipopt.
-NewtonResult SolveStep(const Model& model, const StepperOptions& options, double h, const State& state,
-                       const Eigen::VectorXd* wrench, Data* data, StepReport* report) {
-  StepProblem& problem = data->problem;
-  problem.BeginStep(model, state, h, wrench);
-  if (data->broad_phase) SelectPairs(model, options, h, state, data);
-  auto cold_guess = [&]() {
-    data->z_start.head(6 * model.num_moving()) = state.v;
-    problem.SeedJoints(&data->z_start);
-    for (int c = 0; c < static_cast<int>(problem.blocks().size()); ++c) SeedPair(model, state, c, problem, &data->z_start);
-    problem.ResetTangentAxes(data->z_start);
-    problem.SeedFriction(&data->z_start);
-  };
-  auto solve_from_start = [&]() {
-    data->z = data->z_start;
-    if (options.solver == StepperOptions::Solver::kIpopt) {
-      report->ipopt_solves++;
-      const IpoptNcpResult r = SolveStepWithIpopt(&problem, options.ipopt_max_iterations, &data->z);
-      report->iterations += r.iterations;
-      NewtonResult result;
-      result.iterations = r.iterations;
-      result.residual = std::max(r.equation_residual, r.complementarity);
-      result.converged = r.solved && result.residual <= StepperOptions::kIpoptTolerance;
-      return result;
-    }
-    const NewtonResult result = data->solver.Solve(&problem, options.newton, &data->z);
-    report->iterations += result.iterations;
-    return result;
-  };
-  if (!data->has_warm_start) {
-    cold_guess();
-    return solve_from_start();
-  }
-  data->z_start = data->z;  // the previous step's solution; its velocities are the state's
-  data->z_start.head(6 * model.num_moving()) = state.v;
-  problem.UpdateTangentAxes(&data->z_start);
-  problem.PredictClosestPoints(&data->z_start);
-  const NewtonResult warm = solve_from_start();
-  if (warm.converged) return warm;
-  report->cold_restarts++;
-  data->z_best = data->z;
-  data->axes_warm_failed = problem.tangent_axes();
-  cold_guess();
-  const NewtonResult cold = solve_from_start();
-  if (cold.converged || options.solver == StepperOptions::Solver::kIpopt) return cold;
-  // Keep the better attempt in z_best (and its tangent axes); the next rungs start from it.
-  NewtonResult best = cold;
-  if (!(cold.residual < warm.residual) && std::isfinite(warm.residual)) {
-    best = warm;
-    problem.set_tangent_axes(data->axes_warm_failed);
-  } else {
-    data->z_best = data->z;
-  }
-  data->z_start = data->z_best;
-  auto keep_if_better = [&](const NewtonResult& r) {
-    if (r.residual < best.residual || !std::isfinite(best.residual)) {
-      best = r;
-      data->z_best = data->z;
-    }
-  };
-  // Smoothing continuation: solve with FB smoothed by mu = 1e-2, 1e-3, ... and then exactly, each from the last.
-  report->smoothed_solves++;
-  NewtonResult result;
-  for (double mu = 1e-2; mu > 1e-9 && data->z.allFinite(); mu *= 0.1) {
-    problem.set_smoothing(mu);
-    result = data->solver.Solve(&problem, options.newton, &data->z);
-    report->iterations += result.iterations;
-  }
-  problem.set_smoothing(0.0);
-  if (data->z.allFinite()) {
-    result = data->solver.Solve(&problem, options.newton, &data->z);
-    report->iterations += result.iterations;
-    if (result.converged) return result;
-    keep_if_better(result);
-  }
-  // The other solver: Ipopt on the complementarity-penalty NLP from the same start, polished by Newton.
-  report->ipopt_solves++;
-  data->z = data->z_start;
-  const IpoptNcpResult ipopt = SolveStepWithIpopt(&problem, options.ipopt_max_iterations, &data->z);
-  report->iterations += ipopt.iterations;
-  if (data->z.allFinite()) {
-    result = data->solver.Solve(&problem, options.newton, &data->z);
-    report->iterations += result.iterations;
-    if (result.converged) return result;
-    keep_if_better(result);
-  }
-  data->z = data->z_best;
-  return best;
-}
-
 // Advances the state by h; when the solve fails, by two halves instead, down to h / 2^kMaxSubstepDepth, where the
 // best finite iterate is accepted and reported as not converged. Returns false if the state could not be advanced.
 bool Advance(const Model& model, const StepperOptions& options, double h, int depth, const Eigen::VectorXd* wrench,
@@ -236,9 +99,11 @@ bool Advance(const Model& model, const StepperOptions& options, double h, int de
   if (data->broad_phase) data->problem.ActivePairs(&data->pairs_backup[depth]);
   const bool had_warm_start = data->has_warm_start;
   data->forced_pairs.clear();
-  NewtonResult result;
+  NcpSummary result;
   for (int round = 1;; ++round) {
-    result = SolveStep(model, options, h, *state, wrench, data, report);
+    data->problem.BeginStep(*state, h, wrench);
+    if (data->broad_phase) SelectPairs(model, options, h, *state, data);
+    result = SolveWithRetryLadder(model, options, *state, data, report);
     if (!data->broad_phase || !data->z.allFinite()) break;
     // No pair may interpenetrate at the step end, in or out of the NCP: re-solve with the ones found overlapping.
     const int missing = CheckLeftOutPairs(model, data);
@@ -266,7 +131,8 @@ bool Advance(const Model& model, const StepperOptions& options, double h, int de
   StepProblem& problem = data->problem;
   report->converged = report->converged && result.converged;
   report->residual = std::max(report->residual, result.residual);
-  report->complementarity_error = std::max(report->complementarity_error, problem.ComplementarityError(data->z));
+  const NcpError error = ComputeNcpError(problem, data->z, &data->ncp_error_rows);
+  report->complementarity_error = std::max(report->complementarity_error, error.complementarity);
   problem.Contacts(data->z, &data->contacts);
   WriteState(model, problem, data->z, h, state);
   data->has_warm_start = true;
@@ -282,13 +148,12 @@ StepReport Step(const Model& model, const StepperOptions& options, State* state,
   if (!data->BelongsTo(model)) {
     throw std::invalid_argument("Data was built from another Model: build it as Data(model) from the Model given to Step");
   }
-  if (state->q.size() != 7 * model.num_moving() || state->v.size() != 6 * model.num_moving()) {
-    throw std::invalid_argument("state size does not match the model: expected q of " +
-                                std::to_string(7 * model.num_moving()) + " and v of " +
-                                std::to_string(6 * model.num_moving()) + " values");
+  if (state->q.size() != model.nq() || state->v.size() != model.nv()) {
+    throw std::invalid_argument("state size does not match the model: expected q of " + std::to_string(model.nq()) +
+                                " and v of " + std::to_string(model.nv()) + " values");
   }
-  if (external_wrench_W && (external_wrench_W->size() != 6 * model.num_moving() || !external_wrench_W->allFinite())) {
-    throw std::invalid_argument("external wrench vector must hold " + std::to_string(6 * model.num_moving()) +
+  if (external_wrench_W && (external_wrench_W->size() != model.nv() || !external_wrench_W->allFinite())) {
+    throw std::invalid_argument("external wrench vector must hold " + std::to_string(model.nv()) +
                                 " finite values (force, torque per moving body)");
   }
   const auto wall_start = std::chrono::steady_clock::now();

@@ -1,4 +1,4 @@
-// Every analytic Jacobian block of the step problem against central finite differences (DESIGN.md pitfall 4), at
+// Every analytic Jacobian block of the step problem against central finite differences (doc/method.md, pitfall 4), at
 // random points away from the Fischer-Burmeister kink, for moving-fixed and moving-moving pairs of several shapes.
 #include "implicit_sim/core/step/step_problem.h"
 
@@ -28,17 +28,17 @@ void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, b
   State start = State::Initial(model);
   for (int i = 0; i < start.v.size(); ++i) start.v[i] = 2.0 * u(rng);
   const Eigen::VectorXd wrench = Eigen::VectorXd::Constant(6 * model.num_moving(), 0.3);
-  problem.BeginStep(model, start, 0.05, &wrench);
+  problem.BeginStep(start, 0.05, &wrench);
   problem.ResetTangentAxes(z);
 
   Eigen::VectorXd Phi, Phi_plus, Phi_minus;
   Eigen::MatrixXd J;
-  problem.Evaluate(z, &Phi, &J);
+  problem.Evaluate(z, NcpEvalMode(), &Phi, &J);
   if (sparse) {
     SparseJacobian J_sparse;
     Eigen::VectorXd Phi_sparse;
-    problem.EvaluateSparse(z + Eigen::VectorXd::Constant(z.size(), 0.01), &Phi_sparse, &J_sparse);  // records
-    problem.EvaluateSparse(z, &Phi_sparse, &J_sparse);                                              // replays
+    problem.EvaluateSparse(z + Eigen::VectorXd::Constant(z.size(), 0.01), NcpEvalMode(), &Phi_sparse, &J_sparse);  // records
+    problem.EvaluateSparse(z, NcpEvalMode(), &Phi_sparse, &J_sparse);                                              // replays
     EXPECT_EQ((Phi_sparse - Phi).lpNorm<Eigen::Infinity>(), 0.0);
     EXPECT_EQ((Eigen::MatrixXd(J_sparse.matrix) - J).lpNorm<Eigen::Infinity>(), 0.0);
     J = Eigen::MatrixXd(J_sparse.matrix);
@@ -50,8 +50,8 @@ void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, b
     Eigen::VectorXd zp = z, zm = z;
     zp[col] += eps;
     zm[col] -= eps;
-    problem.Evaluate(zp, &Phi_plus, nullptr);
-    problem.Evaluate(zm, &Phi_minus, nullptr);
+    problem.Evaluate(zp, NcpEvalMode(), &Phi_plus, nullptr);
+    problem.Evaluate(zm, NcpEvalMode(), &Phi_minus, nullptr);
     const Eigen::VectorXd fd = (Phi_plus - Phi_minus) / (2.0 * eps);
     for (int row = 0; row < z.size(); ++row) {
       const double err = std::abs(fd[row] - J(row, col)) / std::max(1.0, std::abs(fd[row]));

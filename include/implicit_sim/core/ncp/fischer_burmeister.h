@@ -1,5 +1,5 @@
-// The Fischer-Burmeister reformulation of a complementarity pair, shared by the contact rows (step_problem.cpp) and
-// the joint rows (step_joints.cpp). Internal to the core.
+// The Fischer-Burmeister reformulation of a complementarity pair 0 <= a _|_ b >= 0 as FB(a, b) = 0, for the rows of
+// an NcpProblem (ncp_problem.h).
 #pragma once
 
 #include <cmath>
@@ -11,7 +11,7 @@ namespace implicit_sim {
 struct FB {
   double value, da, db;
 };
-// With raw = true, b and its derivative instead (see StepProblem::set_raw_complementarity).
+// With raw = true, b and its derivative instead (NcpEvalMode::raw).
 // With smoothing mu > 0: a + b - sqrt(a^2 + b^2 + 2 mu^2), smooth everywhere, whose root set a, b > 0, a b = mu^2
 // tends to the complementarity set as mu -> 0 (smoothing continuation, Chen-Harker-Kanzow-Smale).
 inline FB FischerBurmeister(double a, double b, double mu, bool raw) {

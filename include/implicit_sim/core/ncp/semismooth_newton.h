@@ -1,11 +1,12 @@
-// Semismooth Newton method on the Fischer-Burmeister reformulation Phi(z) = 0 of the step's mixed NCP
-// (DESIGN.md section 2, pitfall 8): exact generalized Jacobian, Armijo backtracking on 0.5 |Phi|^2.
+// Semismooth Newton method on the Fischer-Burmeister reformulation Phi(z) = 0 of a mixed NCP (ncp_problem.h;
+// doc/method.md, pitfall 8): exact generalized Jacobian, Armijo backtracking on 0.5 |Phi|^2.
 // The Newton system (J + delta P) dz = -Phi is solved by LU: dense with partial pivoting for small NCPs, sparse (KLU,
-// see sparse_lu.h, the Jacobian assembled in compressed columns) for large ones. P puts delta on the diagonal
-// entries of the normal-force and friction rows: a proximal term that keeps the system regular where contact forces
-// are redundant (a body resting on several others) while the residual, and so the solution, stays exact. If the LU
-// fails or its direction does not decrease the merit, the Levenberg-Marquardt normal equations
-// (J^T J + lambda I) dz = -J^T Phi are solved instead (dense or sparse LDL^T). The workspace is sized once per layout; a dense Solve does not allocate.
+// see sparse_lu.h, the Jacobian assembled in compressed columns) for large ones. P is the problem's choice of diagonal
+// entries (NcpEvalMode::regularization; the step puts it on its normal-force and friction rows): a proximal term that
+// keeps the system regular where contact forces are redundant (a body resting on several others) while the residual,
+// and so the solution, stays exact. If the LU fails or its direction does not decrease the merit, the
+// Levenberg-Marquardt normal equations (J^T J + lambda I) dz = -J^T Phi are solved instead (dense or sparse LDL^T).
+// The workspace is sized once per layout; a dense Solve does not allocate.
 #pragma once
 
 #include <string>
@@ -15,8 +16,9 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCholesky>
 
+#include "implicit_sim/core/ncp/ncp_problem.h"
+#include "implicit_sim/core/ncp/ncp_summary.h"
 #include "implicit_sim/core/ncp/sparse_lu.h"
-#include "implicit_sim/core/step/step_problem.h"
 
 namespace implicit_sim {
 
@@ -30,29 +32,27 @@ struct NewtonOptions {
   bool IsValid(std::string* error) const;
 };
 
-struct NewtonResult {
-  bool converged = false;
-  int iterations = 0;
-  double residual = 0.0;          // |Phi|_2 at the returned z
-};
-
 class SemismoothNewton {
  public:
   SemismoothNewton(int n, bool sparse);
   bool sparse() const { return sparse_; }
-  // Solves from *z (the initial guess) in place. A non-finite residual is never accepted. The workspace follows
-  // problem->size() (it is resized, which allocates, only when the problem's layout changes).
-  NewtonResult Solve(StepProblem* problem, const NewtonOptions& options, Eigen::VectorXd* z);
-  int lm_fallbacks() const { return lm_fallbacks_; }  // LU directions replaced by the LM one (singular or no descent)
+  // Solves Phi(z) = 0 from *z (the initial guess) in place, with every Fischer-Burmeister function smoothed by
+  // `smoothing` (0: the exact problem). A non-finite residual is never accepted. The workspace follows
+  // problem.size() (it is resized, which allocates, only when that changes).
+  NcpSummary Solve(const NcpProblem& problem, const NewtonOptions& options, Eigen::VectorXd* z,
+                   double smoothing = 0.0);
+  int lm_fallbacks() const { return lm_fallbacks_; }  // over all solves (NcpSummary::lm_fallbacks: one solve)
 
  private:
   void Resize(int n);
-  void Evaluate(StepProblem* problem, const NewtonOptions& options, const Eigen::VectorXd& z, bool jacobian);
+  void Evaluate(const NcpProblem& problem, const Eigen::VectorXd& z, bool jacobian);
   // dz_ from Phi_ and the Jacobian: the LU Newton direction, or with least_squares the Levenberg-Marquardt one.
   bool Direction(const NewtonOptions& options, double merit, bool least_squares);
   // The Armijo step length along dz_ from z (0 if none down to min_step); the new point is left in z_trial_.
-  double LineSearch(StepProblem* problem, const NewtonOptions& options, const Eigen::VectorXd& z, double merit);
+  double LineSearch(const NcpProblem& problem, const NewtonOptions& options, const Eigen::VectorXd& z, double merit);
   bool sparse_;
+  NcpEvalMode mode_;        // of the current solve
+  NcpSummary* summary_ = nullptr;  // of the current solve: evaluation counts
   Eigen::MatrixXd J_, normal_;
   Eigen::VectorXd Phi_, Phi_trial_, z_trial_, rhs_, dz_;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_dense_;

@@ -63,6 +63,7 @@ class Data {
   // --- workspace of the current step and its retry ladder ---
   Eigen::VectorXd z_start;      // the initial guess of the current solve
   Eigen::VectorXd z_best;       // the best iterate of the ladder so far
+  Eigen::VectorXd ncp_error_rows;  // the raw rows of the accepted solution (ncp_error.h)
   std::vector<Vec3> axes_warm_failed;
   std::vector<Eigen::VectorXd> z_backup;  // per sub-step depth
   std::vector<std::vector<int>> pairs_backup;  // per sub-step depth: the pairs z_backup is laid out for

@@ -4,13 +4,13 @@
 
 #include <string>
 
+#include "implicit_sim/core/ncp/ipopt_ncp.h"
 #include "implicit_sim/core/ncp/semismooth_newton.h"
 
 namespace implicit_sim {
 
 struct StepperOptions {
   enum class Solver { kNewton, kIpopt };
-  static constexpr double kIpoptTolerance = 1e-8;  // an Ipopt solve converged: equations and pairs within this
   double h = 0.01;                // time step (s), in (0, 1]
   Solver solver = Solver::kNewton;  // the primary solver; Newton's retry ladder also tries Ipopt
   NewtonOptions newton;
@@ -26,6 +26,12 @@ struct StepperOptions {
   // this (m, [0, 1]): the step's end-of-step contact would throw them apart with an impulse of overlap / h.
   double overlap_tolerance = 1e-6;
   bool IsValid(std::string* error) const;
+  // The Ipopt solver's options (its convergence bar: IpoptNcpOptions::tolerance).
+  IpoptNcpOptions IpoptOptions() const {
+    IpoptNcpOptions ipopt;
+    ipopt.max_iterations = ipopt_max_iterations;
+    return ipopt;
+  }
 };
 
 }  // namespace implicit_sim

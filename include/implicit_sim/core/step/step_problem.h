@@ -43,6 +43,7 @@
 #include "implicit_sim/core/model/joints.h"
 #include "implicit_sim/core/model/model.h"
 #include "implicit_sim/core/model/state.h"
+#include "implicit_sim/core/ncp/ncp_problem.h"
 
 namespace implicit_sim {
 
@@ -64,23 +65,12 @@ struct PairBlock {
 
 struct ContactResult;  // step/data.h
 
-// The Jacobian in compressed sparse columns. Its pattern is recorded on the first evaluation after the active pairs
-// change; later evaluations only add values through the recorded slots (no allocation).
-struct SparseJacobian {
-  Eigen::SparseMatrix<double> matrix;
-  int pattern_version = -1;       // StepProblem::pattern_version() the pattern belongs to
-  std::vector<Eigen::Triplet<double>> recorded;  // the entries as emitted, while recording
-  std::vector<int> slot;          // per emitted entry: its index in matrix.valuePtr()
-  int cursor = 0;
-  bool recording = false;
-};
-
-class StepProblem {
+class StepProblem final : public NcpProblem {
  public:
   // With all_pairs every model pair is in the problem; otherwise none until SetActivePairs.
   explicit StepProblem(const Model& model, bool all_pairs = true);
 
-  int size() const { return size_; }
+  int size() const override { return size_; }
   // Unknowns before the first pair block: the body velocities and the joint blocks.
   int pair_base() const { return pair_base_; }
   int joint_offset(int joint) const { return joint_offset_[joint]; }
@@ -93,11 +83,11 @@ class StepProblem {
   void SetActivePairs(const std::vector<int>& pairs, const Eigen::VectorXd* z_old, Eigen::VectorXd* z_new,
                       std::vector<int>* new_blocks);
   // Changes whenever the layout (and so the sparsity pattern of the Jacobian) changes.
-  int pattern_version() const { return pattern_version_; }
+  int pattern_version() const override { return pattern_version_; }
 
   // Stores the start-of-step quantities (poses, velocities, world inertia) and the external wrenches
   // of the step: 6 values per moving body slot (force N, torque N m; world frame, at the centre of mass), or null.
-  void BeginStep(const Model& model, const State& start, double h, const Eigen::VectorXd* external_wrench_W);
+  void BeginStep(const State& start, double h, const Eigen::VectorXd* external_wrench_W);
 
   // The tangent basis (t, o) of a pair is built from n and a world reference axis fixed for the whole step
   // (DESIGN.md pitfall 3). UpdateTangentAxes keeps each pair's axis while |axis . n| < 0.9 for the normal in *z and
@@ -124,22 +114,22 @@ class StepProblem {
   // SeedFriction.
   void SeedJoints(Eigen::VectorXd* z) const;
 
-  // The FB-reformulated residual Phi(z) and, if J is not null, its exact generalized Jacobian (n x n), dense or sparse.
-  void Evaluate(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, Eigen::MatrixXd* J);
-  void EvaluateSparse(const Eigen::VectorXd& z, Eigen::VectorXd* Phi, SparseJacobian* J);
-  // Adds delta (>= 0) to the Jacobian's diagonal entries of the friction rows and (delta / Fs) of the normal-force
-  // rows, never to Phi: a proximal regularization of the Newton direction for the sparse LU (see semismooth_newton.h).
-  void set_jacobian_regularization(double delta) { regularization_ = delta; }
-  // Friction rows with sigma + max(d, 0) / h in place of sigma (see AddPair); off by default.
+  // The FB-reformulated residual Phi(z) (or the raw rows) and, if J is not null, its exact generalized Jacobian
+  // (n x n), dense or sparse. NcpEvalMode::regularization goes on the Jacobian's diagonal entries of the friction
+  // rows and (divided by Fs) of the normal-force rows: a proximal term for the Newton direction (semismooth_newton.h).
+  void Evaluate(const Eigen::VectorXd& z, const NcpEvalMode& mode, Eigen::VectorXd* Phi,
+                Eigen::MatrixXd* J) const override;
+  void EvaluateSparse(const Eigen::VectorXd& z, const NcpEvalMode& mode, Eigen::VectorXd* Phi,
+                      SparseJacobian* J) const override;
+  // Raw rows: each complementarity row returns b(z), the function side of its pair (-f_i(a1), -g_j(a2), d, zeta);
+  // the variable side a is the unknown with the row's own index (scaled by 1/Fs for the normal force).
+  bool IsComplementarityRow(int row, double* scale) const override;
+  // Friction rows with sigma + max(d, 0) / h in place of sigma (see AddPair); off by default. Keeps the Newton matrix
+  // regular at separated pairs; fixed for the life of the problem (Data turns it on).
   void set_regular_separated_friction(bool on) { regular_separated_friction_ = on; }
 
-  // The largest |min(a, b)| over all complementarity pairs (in their scaled units).
-  double ComplementarityError(const Eigen::VectorXd& z);
-  // The largest |E_i(z)| over the equations and the largest |min(a_i, b_i(z))| over the pairs, from the raw rows.
-  void RawResiduals(const Eigen::VectorXd& z, double* equations, double* complementarity);
-
   // The contact quantities of every pair in the problem for a solution z (one entry per block, in block order).
-  void Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>* out);
+  void Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>* out) const;
 
   // The joint limit effort l_lo - l_hi of joint j in a solution z (N m or N, positive towards increasing position; 0
   // for a joint without limits): the step-average effort the limit exerted.
@@ -149,14 +139,6 @@ class StepProblem {
   Pose EndPose(int body, const Eigen::VectorXd& z) const;
 
   double force_scale() const { return force_scale_; }
-  // Smoothing mu >= 0 of every Fischer-Burmeister function (0: the exact problem). See FischerBurmeister.
-  void set_smoothing(double mu) { smoothing_ = mu; }
-  // Raw mode: each complementarity row returns b(z), the function side of its pair (-f_i(a1), -g_j(a2), d, zeta),
-  // instead of FB(a, b). The variable side a is the unknown with the row's own index (scaled by 1/Fs for the
-  // normal force). The Ipopt formulation of the step (ipopt_ncp.h) uses it.
-  void set_raw_complementarity(bool raw) { raw_ = raw; }
-  // Whether row i is a complementarity row, and the scale of its variable side a = scale * z[i].
-  bool IsComplementarityRow(int row, double* scale) const;
 
  private:
   struct BodyStep {   // per body, for the current step
@@ -178,44 +160,46 @@ class StepProblem {
     Mat3 H;           // world Hessian
   };
 
-  void UpdateBodies(const Eigen::VectorXd& z);
+  void UpdateBodies(const Eigen::VectorXd& z) const;
   Eval EvaluateInequality(int body, int k, const Vec3& p_W) const;
-  void EvaluateAll(const Eigen::VectorXd& z, Eigen::VectorXd* Phi);
-  void AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi);
-  void AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi);
-  void AddJointRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi);
+  void EvaluateAll(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const;
+  void AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const;
+  void AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const;
+  void AddJointRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const;
   // Joint helpers (step_joints.cpp): the start-of-step gradients, the Jacobian of an end-of-step joint function, of a
   // joint rate, and a generalized joint force on the body rows.
   void BeginJoints();
   void AddEndGradientRow(int row, const JointGradient& g, const BodyEnd& eP, const BodyEnd& eC,
-                         double scale);
-  void AddRateRow(int row, const JointGradient& g, const BodyEnd& eP, const BodyEnd& eC, double scale);
+                         double scale) const;
+  void AddRateRow(int row, const JointGradient& g, const BodyEnd& eP, const BodyEnd& eC, double scale) const;
   void AddJointForce(const JointGradient& g, double force, int col, double dforce_dcol, const BodyEnd& eP,
-                     const BodyEnd& eC, Eigen::VectorXd* Phi);
+                     const BodyEnd& eC, Eigen::VectorXd* Phi) const;
   void AddJointLimitRows(const Joint& joint, int col, const Eigen::VectorXd& z, const BodyEnd& eP, const BodyEnd& eC,
-                         const JointGradient& G_q, Eigen::VectorXd* Phi);
+                         const JointGradient& G_q, Eigen::VectorXd* Phi) const;
   void AddJointFrictionRows(const Joint& joint, int col, const Eigen::VectorXd& z, const BodyEnd& eP,
-                            const BodyEnd& eC, const JointGradient& G_q, Eigen::VectorXd* Phi);
+                            const BodyEnd& eC, const JointGradient& G_q, Eigen::VectorXd* Phi) const;
   void AddJointDamping(const Joint& joint, const BodyEnd& eP, const BodyEnd& eC, const JointGradient& G_q,
-                       Eigen::VectorXd* Phi);
+                       Eigen::VectorXd* Phi) const;
   const BodyEnd& ParentEnd(const Joint& joint) const { return joint.parent < 0 ? world_end_ : end_[joint.parent]; }
   // Adds `block` to J at (row, col), dense or sparse (every call emits the same entries for the same layout, so that
   // the sparse pattern recorded once stays valid). Rows of locked velocities become "velocity = 0".
   template <typename Block>
-  void AddJ(int row, int col, const Block& block);
-  void AddJ(int row, int col, double value);
+  void AddJ(int row, int col, const Block& block) const;
+  void AddJ(int row, int col, double value) const;
+  void AddJUnlocked(int row, int col, double value) const;  // AddJ that also writes the rows of locked velocities
+  bool WantJacobian() const { return eval_.J_dense || eval_.J_sparse; }
   struct ContactWrench {  // the contact force F on body 1 and the torsional moment lr about n, with derivatives
     Vec3 n, F, dF_dln, dF_dst, dF_dso;
     Mat3 dF_dn;
     double lr, dlr_dln, dlr_dsr;
   };
   void AddContactWrench(int c, int body, double sign, const Vec3& r, const ContactWrench& wrench,
-                        Eigen::VectorXd* Phi);
+                        Eigen::VectorXd* Phi) const;
 
   const Model& model_;
   std::vector<PairBlock> blocks_;
   std::vector<BodyStep> start_;
-  std::vector<BodyEnd> end_;
+  mutable std::vector<BodyEnd> end_;  // the current iterate's end-of-step bodies (a cache of Evaluate)
   std::vector<Vec3> tangent_axis_;   // per pair
   std::vector<int> joint_offset_;    // per joint
   int pair_base_ = 0;
@@ -228,17 +212,17 @@ class StepProblem {
   int size_ = 0;
   double h_ = 0.0;
   double force_scale_ = 1.0;
-  double smoothing_ = 0.0;
-  bool raw_ = false;
-  Eigen::VectorXd raw_scratch_;  // the raw rows, for RawResiduals
   std::vector<char> complementarity_kind_;  // per row: 0 equation, 1 complementarity, 2 normal-force complementarity
   std::vector<char> locked_row_;             // per body row: the velocity is locked
-  double regularization_ = 0.0;
   bool regular_separated_friction_ = false;
   int pattern_version_ = 0;
-  // Where Evaluate writes the Jacobian (at most one non-null; both null: no Jacobian).
-  Eigen::MatrixXd* J_dense_ = nullptr;
-  SparseJacobian* J_sparse_ = nullptr;
+  // The evaluation in progress: its mode and where it writes the Jacobian (at most one non-null; both null: none).
+  struct EvalContext {
+    NcpEvalMode mode;
+    Eigen::MatrixXd* J_dense = nullptr;
+    SparseJacobian* J_sparse = nullptr;
+  };
+  mutable EvalContext eval_;
 };
 
 }  // namespace implicit_sim

@@ -15,39 +15,9 @@
 #include "implicit_sim/core/model/state.h"
 #include "implicit_sim/core/step/data.h"
 #include "implicit_sim/core/step/options.h"
+#include "implicit_sim/core/step/step_report.h"
 
 namespace implicit_sim {
-
-// Why a step was not accepted as a good one. With kInitialOverlap, kDiverged and kNoFiniteSolution the state is left
-// exactly as it was before the step (StepReport::advanced is false).
-enum class StepFault {
-  kNone,
-  kNotConverged,      // advanced with the best iterate found, reported as not converged (the retry ladder ran out)
-  kNoFiniteSolution,  // every rung produced non-finite values
-  kInitialOverlap,    // a cold step started with two bodies overlapping by more than overlap_tolerance
-  kDiverged,          // the end velocities exceed max_speed or max_angular_speed
-};
-const char* StepFaultName(StepFault fault);  // "none", "not_converged", "no_finite_solution", "initial_overlap", "diverged"
-
-struct StepReport {
-  bool converged = false;       // the NCP (every sub-step's, if the step was split) was solved to tolerance
-  bool advanced = false;        // the state was advanced (false only when no finite solution was found)
-  int cold_restarts = 0;        // solves whose warm start failed and that were retried from a cold start
-  int smoothed_solves = 0;      // solves that went on to a smoothing continuation after the cold start failed
-  int ipopt_solves = 0;         // Ipopt solves (the primary solver, or the ladder rung after the continuation)
-  int substeps = 0;             // times a (sub-)step was split into two halves after its solve failed
-  int broad_phase_additions = 0;  // pairs left out by the broad phase, found overlapping at the step end and added
-  int pairs_in_ncp = 0;         // pairs in the NCP of the (last) solve
-  int iterations = 0;           // Newton iterations, all attempts
-  double residual = 0.0;        // |Phi|_2 of the accepted solution (the largest over sub-steps)
-  double complementarity_error = 0.0;
-  int active_contacts = 0;      // pairs with normal force > contact_threshold
-  double joint_position_error = 0.0;  // the largest violation of a joint's linear equalities at the step end (m)
-  double joint_angle_error = 0.0;     // and of its angular equalities (rad); see joints.h
-  double wall_time_s = 0.0;
-  StepFault fault = StepFault::kNone;
-  std::string fault_detail;     // which pair overlaps or which body diverged, with the numbers (empty without fault)
-};
 
 // Advances *state by one step of options.h. A cold step (no warm start) first checks that no two bodies overlap; a
 // step whose end velocities exceed options.max_speed / max_angular_speed is undone. StepReport::fault says what went

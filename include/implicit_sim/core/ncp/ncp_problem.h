@@ -1,0 +1,73 @@
+// The seam between the step and its solvers: a mixed nonlinear complementarity problem in the reformulated form
+// Phi(z) = 0, with z in R^n and one row per unknown. Row i is either
+//   an equation            E_i(z) = 0, or
+//   a complementarity row  0 <= a_i _|_ b_i(z) >= 0 with a_i = scale_i z_i, reformulated as FB(a_i, b_i(z)) = 0
+//                          (fischer_burmeister.h).
+// The solvers (semismooth_newton.h, ipopt_ncp.h) and the error check (ncp_error.h) see a problem only through this
+// interface, so they can be tested on small problems with known solutions and handed any NCP (a whole step or part).
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+namespace implicit_sim {
+
+// How a problem is evaluated; chosen by the solver for each call.
+struct NcpEvalMode {
+  // Smoothing mu >= 0 of every Fischer-Burmeister function (0: the exact problem); see FischerBurmeister.
+  double smoothing = 0.0;
+  // Raw rows: each complementarity row returns b_i(z), the function side of its pair, instead of FB(a_i, b_i(z)).
+  bool raw = false;
+  // A proximal term delta >= 0 that the problem may add to the Jacobian's diagonal entries of rows it chooses
+  // (never to Phi), to keep the Newton matrix regular where the problem is degenerate.
+  double regularization = 0.0;
+};
+
+// A Jacobian in compressed sparse columns. Its pattern is recorded by the first evaluation after the problem's
+// pattern_version changes; later evaluations replay the same entries in the same order into the recorded slots
+// (no allocation). A problem's EvaluateSparse calls Begin, then Add for every entry, then Finish.
+class SparseJacobian {
+ public:
+  Eigen::SparseMatrix<double> matrix;
+  int pattern_version() const { return pattern_version_; }
+  // Starts an evaluation of a problem whose pattern is `pattern_version`.
+  void Begin(int pattern_version);
+  // Adds `value` at (row, col); duplicates are summed. The same sequence of (row, col) for a given pattern.
+  void Add(int row, int col, double value) {
+    if (recording_) {
+      recorded_.emplace_back(row, col, value);
+    } else {
+      matrix.valuePtr()[slot_[cursor_++]] += value;
+    }
+  }
+  // Ends the evaluation of an n x n Jacobian (builds the pattern after a recording evaluation).
+  void Finish(int n);
+
+ private:
+  int pattern_version_ = -1;
+  int pending_version_ = -1;
+  bool recording_ = false;
+  std::vector<Eigen::Triplet<double>> recorded_;  // the entries as emitted, while recording
+  std::vector<int> slot_;                         // per emitted entry: its index in matrix.valuePtr()
+  int cursor_ = 0;
+};
+
+class NcpProblem {
+ public:
+  virtual ~NcpProblem() = default;
+  virtual int size() const = 0;  // n: unknowns and rows
+  // Whether row i is a complementarity row, and the scale of its variable side a_i = scale * z_i (scale > 0).
+  virtual bool IsComplementarityRow(int row, double* scale) const = 0;
+  // Changes whenever the size or the sparsity pattern of the Jacobian changes.
+  virtual int pattern_version() const = 0;
+  // Phi(z) and, if J is not null, an element of its generalized Jacobian (n x n), dense or sparse. Evaluations are
+  // not re-entrant: one problem object serves one solver at a time.
+  virtual void Evaluate(const Eigen::VectorXd& z, const NcpEvalMode& mode, Eigen::VectorXd* Phi,
+                        Eigen::MatrixXd* J) const = 0;
+  virtual void EvaluateSparse(const Eigen::VectorXd& z, const NcpEvalMode& mode, Eigen::VectorXd* Phi,
+                              SparseJacobian* J) const = 0;
+};
+
+}  // namespace implicit_sim

@@ -1,0 +1,26 @@
+// The retry ladder of one step solve: what the stepper tries, in order, until the step NCP is solved.
+//   1. warm start: the previous step's solution carried over the step (seeding.h), by the primary solver;
+//   2. cold start: fresh closest points, normals and friction seeds;
+//   3. smoothing continuation: Newton on the Fischer-Burmeister functions smoothed by mu = 1e-2, 1e-3, ... 1e-8, each
+//      from the last, then on the exact problem;
+//   4. Ipopt on the complementarity-penalty NLP (ncp/ipopt_ncp.h) from the better of rungs 1-2, polished by Newton.
+// Without a warm start the ladder begins at rung 2. With the Ipopt solver as the primary one it stops after rung 2.
+// When every rung fails the best finite iterate is kept; the stepper then splits the step (time_stepper.h).
+#pragma once
+
+#include "implicit_sim/core/model/model.h"
+#include "implicit_sim/core/model/state.h"
+#include "implicit_sim/core/ncp/ncp_summary.h"
+#include "implicit_sim/core/step/data.h"
+#include "implicit_sim/core/step/options.h"
+#include "implicit_sim/core/step/step_report.h"
+
+namespace implicit_sim {
+
+// Solves the step NCP of data->problem (BeginStep called for `state`, its pairs laid out) and leaves the best solution
+// in data->z (and its tangent axes in the problem); does not touch the state. Counts the rungs and iterations in
+// *report. The summary is that of the accepted solve.
+NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& options, const State& state, Data* data,
+                                StepReport* report);
+
+}  // namespace implicit_sim
