@@ -2,7 +2,7 @@
 # Source it; it sets WS (the catkin workspace, default /tmp/implicit_sim_ws) and REPO.
 REPO=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 WS=${IMPLICIT_SIM_WS:-/tmp/implicit_sim_ws}
-# Debian's python3 first: a pyenv python on PATH breaks catkin and rostest (../shared/ROS1_DEBIAN.md pitfalls 1-2).
+# Debian's python3 first: a pyenv python on PATH breaks catkin and rostest (they need Debian's ROS modules).
 export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
 export ROS_HOME=$WS/.ros ROS_LOG_DIR=$WS/.ros/log ROS_HOSTNAME=localhost
 

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Writes the validation scenes of ../shared/scenarios/SCENARIOS.md into scenes/ (P1 smooth and polygonal discs,
+"""Writes the validation scenes (doc/scenes.md) into scenes/ (P1 smooth and polygonal discs,
 P2, P3). The files are committed; rerun this after changing it: /usr/bin/python3 scripts/make_scenes.py"""
 import os
 

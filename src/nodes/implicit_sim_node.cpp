@@ -1,4 +1,4 @@
-// implicit_sim_node: the simulator as a ROS node (see README.md for topics, services and parameters).
+// implicit_sim_node: the simulator as a ROS node (see doc/ros_node.md for topics, services and parameters).
 #include <csignal>
 #include <iostream>
 

@@ -1,5 +1,5 @@
 // Headless runner: implicit_sim_run --scene FILE --duration T --dt H --out DIR
-// Writes DIR/trajectory.csv and DIR/summary.json (see README.md). No roscore needed. With --stop-at-rest E:S the run
+// Writes DIR/trajectory.csv and DIR/summary.json (see doc/runner.md). No roscore needed. With --stop-at-rest E:S the run
 // ends early once the kinetic energy has stayed below E (J) for S (s) of simulated time.
 #include <charconv>
 #include <cmath>

@@ -1,4 +1,4 @@
-// Batch studies (README.md, "Batch studies"): implicit_sim_batch through GNU parallel on this machine, resume after a
+// Batch studies (doc/batch.md): implicit_sim_batch through GNU parallel on this machine, resume after a
 // killed run, the cube's resting faces against 1/6, the Slurm array script, the sweep file's error contract, and the
 // runner's --stop-at-rest rule. Every check is on outputs (bytes, counts, fields); nothing is timed.
 #include <signal.h>

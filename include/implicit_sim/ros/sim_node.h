@@ -1,5 +1,5 @@
 // The ROS node over the core: steps on its own thread, publishes /clock, /tf, /tf_static, ~contacts, ~markers,
-// ~step_stats, ~body_states and /diagnostics, and serves a gazebo_ros-like control API. README.md documents the
+// ~step_stats, ~body_states and /diagnostics, and serves a gazebo_ros-like control API. doc/ros_node.md documents the
 // contract (topics, services, parameters).
 #pragma once
 

@@ -272,11 +272,9 @@ double PenetrationBound(const ConvexShape& shape1, const Pose& X_WB1, const Conv
                         const Vec3& p_W, const Vec3& n_W) {
   const double norm = n_W.norm();
   if (!(norm > 0.0) || !std::isfinite(norm) || !p_W.allFinite()) return kInf;
-  const Vec3 n = n_W / norm;
-  const double np = n.dot(p_W);
-  const double crossing2 = std::max(0.0, SupportValue(shape2, X_WB2, n) - np);
-  const double crossing1 = std::max(0.0, np + SupportValue(shape1, X_WB1, -n));
-  return crossing1 + crossing2;
+  const auto support1 = [&](const Vec3& u_W) { return SupportValue(shape1, X_WB1, u_W); };
+  const auto support2 = [&](const Vec3& u_W) { return SupportValue(shape2, X_WB2, u_W); };
+  return PlaneCrossingBound(support1, support2, p_W, n_W / norm);
 }
 
 }  // namespace implicit_sim

@@ -89,15 +89,15 @@ TrajectoryWriter::TrajectoryWriter(const std::string& path, const Model& model, 
 void TrajectoryWriter::WriteBodies(const State& state) {
   out_ << FormatNumber(state.t);
   for (int k = 0; k < model_.num_moving(); ++k) {
-    for (int i = 0; i < 7; ++i) out_ << ',' << FormatNumber(state.q[7 * k + i]);
-    for (int i = 0; i < 6; ++i) out_ << ',' << FormatNumber(state.v[6 * k + i]);
+    for (int i = 0; i < Model::kBodyNq; ++i) out_ << ',' << FormatNumber(state.q[Model::q_offset(k) + i]);
+    for (int i = 0; i < Model::kBodyNv; ++i) out_ << ',' << FormatNumber(state.v[Model::v_offset(k) + i]);
   }
 }
 
 void TrajectoryWriter::WriteEnergies(const State& state) {
   double potential = 0.0;
   for (int k = 0; k < model_.num_moving(); ++k) {
-    potential -= model_.bodies[model_.moving_bodies[k]].mass * model_.gravity_W.dot(state.q.segment<3>(7 * k));
+    potential -= model_.bodies[model_.moving_bodies[k]].mass * model_.gravity_W.dot(state.q.segment<3>(Model::q_offset(k)));
   }
   out_ << ',' << FormatNumber(KineticEnergy(model_, state)) << ',' << FormatNumber(potential) << '\n';
 }

@@ -120,9 +120,9 @@ double ClampJointEffort(const Joint& joint, double commanded) {
 
 void AddJointEffortWrench(const Model& model, const State& state, const Eigen::VectorXd& efforts,
                           Eigen::VectorXd* wrench_W) {
-  if (efforts.size() != static_cast<int>(model.joints.size()) || wrench_W->size() != 6 * model.num_moving()) {
+  if (efforts.size() != static_cast<int>(model.joints.size()) || wrench_W->size() != model.nv()) {
     throw std::invalid_argument("joint efforts: expected " + std::to_string(model.joints.size()) +
-                                " efforts and a wrench vector of " + std::to_string(6 * model.num_moving()));
+                                " efforts and a wrench vector of " + std::to_string(model.nv()));
   }
   if (!efforts.allFinite()) throw std::invalid_argument("joint efforts must be finite");
   for (size_t j = 0; j < model.joints.size(); ++j) {
@@ -135,8 +135,8 @@ void AddJointEffortWrench(const Model& model, const State& state, const Eigen::V
                                         std::make_tuple(joint.child, g.dp_C, g.dth_C)}) {
       const int k = body < 0 ? -1 : model.velocity_slot[body];
       if (k < 0) continue;
-      wrench_W->segment<3>(6 * k) += effort * dp;
-      wrench_W->segment<3>(6 * k + 3) += effort * dth;
+      wrench_W->segment<3>(Model::v_offset(k)) += effort * dp;
+      wrench_W->segment<3>(Model::v_offset(k) + 3) += effort * dth;
     }
   }
 }

@@ -5,15 +5,15 @@ namespace implicit_sim {
 State State::Initial(const Model& model) {
   State s;
   const int n = model.num_moving();
-  s.q.resize(7 * n);
-  s.v.resize(6 * n);
+  s.q.resize(model.nq());
+  s.v.resize(model.nv());
   for (int k = 0; k < n; ++k) {
     const Body& body = model.bodies[model.moving_bodies[k]];
     const Eigen::Quaterniond quat(body.X_WB0.linear());
-    s.q.segment<3>(7 * k) = body.X_WB0.translation();
-    s.q.segment<4>(7 * k + 3) << quat.w(), quat.x(), quat.y(), quat.z();
-    s.v.segment<3>(6 * k) = body.v_WB0;
-    s.v.segment<3>(6 * k + 3) = body.w_WB0;
+    s.q.segment<3>(Model::q_offset(k)) = body.X_WB0.translation();
+    s.q.segment<4>(Model::q_offset(k) + 3) << quat.w(), quat.x(), quat.y(), quat.z();
+    s.v.segment<3>(Model::v_offset(k)) = body.v_WB0;
+    s.v.segment<3>(Model::v_offset(k) + 3) = body.w_WB0;
   }
   return s;
 }
@@ -22,8 +22,9 @@ Pose State::X_WB(const Model& model, int body) const {
   const int k = model.velocity_slot[body];
   if (k < 0) return model.bodies[body].X_WB0;
   Pose X = Pose::Identity();
-  X.translation() = q.segment<3>(7 * k);
-  X.linear() = Eigen::Quaterniond(q[7 * k + 3], q[7 * k + 4], q[7 * k + 5], q[7 * k + 6]).normalized()
+  const int iq = Model::q_offset(k);
+  X.translation() = q.segment<3>(iq);
+  X.linear() = Eigen::Quaterniond(q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]).normalized()
                    .toRotationMatrix();
   return X;
 }

@@ -203,8 +203,7 @@ void SetChildVelocity(const Model& model, const Joint& joint, const Pose& X_WJ, 
 void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, Model* model) {
   std::vector<urdf::JointSharedPtr> ordered;
   for (const auto& [name, joint] : urdf.joints_) ordered.push_back(joint);
-  // Parents before children: by depth below 'world', then by name (std::sort: stable_sort's temporary buffer goes
-  // through operator new(nothrow), which the allocation test's counting hook does not pair under ASan).
+  // Parents before children: by depth below 'world', then by name (a strict total order: no stable sort needed).
   std::sort(ordered.begin(), ordered.end(), [&](const auto& x, const auto& y) {
     const int dx = Depth(*urdf.getLink(x->child_link_name)), dy = Depth(*urdf.getLink(y->child_link_name));
     return dx != dy ? dx < dy : x->name < y->name;

@@ -62,10 +62,10 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
   if (!sparse_) {
     if (!least_squares) {
       // The Newton direction J dz = -Phi by LU with partial pivoting. (The LM normal equations alone square J's
-      // condition number, which grows as 1/h: P3 at h = 0.001 stalled at |Phi| = 1e-7 in its first steps.)
+      // condition number, which grows as 1/h; doc/method.md, pitfall 8.)
       lu_dense_.compute(J_);
       // A (numerically) singular J, such as the locked axes of the planar disc give: no Newton direction. (Its LU
-      // direction would be huge and send the line search through 33 halvings before the LM direction is tried.)
+      // direction would be huge and exhaust the line search before the LM direction is tried.)
       if (!(lu_dense_.rcond() > 1e-13)) return false;
       dz_.noalias() = lu_dense_.solve(-Phi_);
       return dz_.allFinite();

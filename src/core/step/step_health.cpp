@@ -23,29 +23,26 @@ double OverlapBound(const Model& model, const State& state, const ContactPair& p
   Vec3 normal_W = Vec3::UnitZ();
   double grad_norm;
   MostActiveInequality(body2.shape, X_WB2, cp.p_W2, &normal_W, &grad_norm);
-  // How far each body crosses the plane through p_W2 on normal_W (distance_oracle.h's PenetrationBound), with
-  // closed-form support points where the shape has them (the oracle's support value solves an NLP, about 10 ms,
-  // except for a single half-space).
+  // The bound of PenetrationBound through p_W2 on normal_W, with closed-form support points where the shape has them
+  // (the oracle's support value solves an NLP, about 10 ms, except for a single half-space).
   const auto support = [](const ConvexShape& shape, const Pose& X_WB, const Vec3& u_W) {
     Vec3 p_W;
     return SupportPoint(shape, X_WB, u_W, &p_W) ? u_W.dot(p_W) : SupportValue(shape, X_WB, u_W);
   };
-  const double np = normal_W.dot(cp.p_W2);
-  return std::max(0.0, support(body2.shape, X_WB2, normal_W) - np) +
-         std::max(0.0, np + support(body1.shape, X_WB1, -normal_W));
+  const auto support1 = [&](const Vec3& u_W) { return support(body1.shape, X_WB1, u_W); };
+  const auto support2 = [&](const Vec3& u_W) { return support(body2.shape, X_WB2, u_W); };
+  return PlaneCrossingBound(support1, support2, cp.p_W2, normal_W);
 }
 
 }  // namespace
 
-bool FindInitialOverlap(const Model& model, const State& state, double tolerance, BroadPhase* broad,
-                        std::vector<Pose>* X_WB, std::vector<double>* inflation, std::vector<int>* candidates,
-                        std::string* detail) {
+bool FindInitialOverlap(const Model& model, const State& state, double tolerance, Data* data, std::string* detail) {
   for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
-    (*X_WB)[b] = state.X_WB(model, b);
-    (*inflation)[b] = 0.0;
+    data->X_WB[b] = state.X_WB(model, b);
+    data->inflation[b] = 0.0;
   }
-  broad->FindPairs(*X_WB, *inflation, candidates);
-  for (int p : *candidates) {
+  data->broad.FindPairs(data->X_WB, data->inflation, &data->candidates);
+  for (int p : data->candidates) {
     const double depth = OverlapBound(model, state, model.pairs[p], tolerance);
     if (depth > tolerance) {
       *detail = "pair '" + model.PairName(p) + "' overlaps by up to " + FormatNumber(depth) + " m at t = " +

@@ -12,14 +12,14 @@ namespace implicit_sim {
 namespace pi = pair_index;
 StepProblem::StepProblem(const Model& model, bool all_pairs)
     : model_(model), start_(model.bodies.size()), end_(model.bodies.size()), force_scale_(model.ForceScale()) {
-  external_wrench_W_ = Eigen::VectorXd::Zero(6 * model.num_moving());
-  locked_row_.assign(6 * model.num_moving(), 0);
+  external_wrench_W_ = Eigen::VectorXd::Zero(model.nv());
+  locked_row_.assign(model.nv(), 0);
   for (size_t b = 0; b < model.bodies.size(); ++b) {
     const int k = model.velocity_slot[b];
-    end_[b].col = k < 0 ? -1 : 6 * k;
-    for (int i = 0; k >= 0 && i < 6; ++i) locked_row_[6 * k + i] = model.bodies[b].locked[i];
+    end_[b].col = k < 0 ? -1 : Model::v_offset(k);
+    for (int i = 0; k >= 0 && i < 6; ++i) locked_row_[Model::v_offset(k) + i] = model.bodies[b].locked[i];
   }
-  pair_base_ = 6 * model.num_moving();
+  pair_base_ = model.nv();
   for (const Joint& joint : model.joints) {
     joint_offset_.push_back(pair_base_);
     pair_base_ += joint.size();
@@ -94,7 +94,7 @@ void StepProblem::BeginStep(const State& start, double h, const Eigen::VectorXd*
   if (external_wrench_W) {
     external_wrench_W_ = *external_wrench_W;
     for (int k = 0; k < model.num_moving(); ++k) {
-      force_scale_ = std::max(force_scale_, external_wrench_W_.segment<3>(6 * k).norm());
+      force_scale_ = std::max(force_scale_, external_wrench_W_.segment<3>(Model::v_offset(k)).norm());
     }
   } else {
     external_wrench_W_.setZero();
@@ -221,13 +221,13 @@ void StepProblem::AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) co
     const int b = model_.moving_bodies[k];
     const Body& body = model_.bodies[b];
     const BodyStep& s = start_[b];
-    const int row = 6 * k;
+    const int row = Model::v_offset(k);
     const Vec3 f_ext = body.mass * model_.gravity_W + body.f_applied_W + external_wrench_W_.segment<3>(row);
     const Vec3 tau_ext = body.tau_applied_W + external_wrench_W_.segment<3>(row + 3);
     Phi->segment<3>(row) = (body.mass * (z.segment<3>(row) - s.v0) / h_ - f_ext) / Fs;
     // Angular momentum form: (I_W(R1) w1 - I_W(R0) w0) / h = torque, with the inertia at the end-of-step
     // orientation R1 = Exp(h w1) R0. It holds the gyroscopic effect implicitly and conserves angular momentum exactly
-    // without torque (the explicit w0 x I w0 term drifted 6 % in energy over 10 s on a tumbling ellipsoid).
+    // without torque (doc/method.md, pitfall 7).
     const BodyEnd& e = end_[b];
     const Mat3 I_W1 = e.R * body.I_B * e.R.transpose();
     const Vec3 w1 = z.segment<3>(row + 3);

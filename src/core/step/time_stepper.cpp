@@ -159,9 +159,8 @@ StepReport Step(const Model& model, const StepperOptions& options, State* state,
   const auto wall_start = std::chrono::steady_clock::now();
   StepReport report;
   report.converged = true;
-  if (!data->has_warm_start && FindInitialOverlap(model, *state, options.overlap_tolerance, &data->broad,
-                                                  &data->X_WB, &data->inflation, &data->candidates,
-                                                  &report.fault_detail)) {
+  if (!data->has_warm_start &&
+      FindInitialOverlap(model, *state, options.overlap_tolerance, data, &report.fault_detail)) {
     report.converged = false;
     report.fault = StepFault::kInitialOverlap;
     return report;

@@ -62,7 +62,7 @@ TEST(BroadPhase, TheEndOfStepCheckAddsAPairTheBroadPhaseCouldNotForesee) {
   options.broad_phase_margin = 0.0;
   Data data(model, Data::PairSelection::kBroadPhase);
   State state = State::Initial(model);
-  Eigen::VectorXd wrench = Eigen::VectorXd::Zero(6 * model.num_moving());
+  Eigen::VectorXd wrench = Eigen::VectorXd::Zero(model.nv());
   wrench[0] = 2000.0;  // N on s0 along +x: 20 m/s within one step, 0.2 m of travel against the 0.1 m gap
   const StepReport report = Step(model, options, &state, &data, &wrench);
   EXPECT_TRUE(report.converged);

@@ -35,7 +35,7 @@ TEST(PileScene, LayoutFollowsTheScenarioAndSpheresStartApart) {
       EXPECT_LT(body.X_WB0.translation().cwiseAbs().head<2>().maxCoeff(), 0.5 - 0.06);
     }
     // Spheres (r = 0.05) never overlap at the start: the grid spacing 0.12 less two jitters of 0.01 leaves 0.10.
-    // (The scenario's ellipsoids, 0.12 m long along x, can: see README.md.)
+    // (The scenario's ellipsoids, 0.12 m long along x, can: see doc/scenes.md.)
     if (shape == PileShape::kSphere) EXPECT_GE(min_spacing, 0.1);
     // The walls hold the bodies in: every wall's half-space excludes the box's centre.
     for (const char* wall : {"floor", "wall_px", "wall_nx", "wall_py", "wall_ny"}) {

@@ -63,11 +63,11 @@ TEST(Allocation, AThousandWarmStepsAllocateNothing) {
     const StepperOptions options;
     Step(model, options, &state, &data);  // the first step starts cold (distance oracle)
     // A push on the top body that changes every step, so that every step iterates.
-    Eigen::VectorXd wrench = Eigen::VectorXd::Zero(6 * model.num_moving());
+    Eigen::VectorXd wrench = Eigen::VectorXd::Zero(model.nv());
     const long before = g_allocations.load();
     int cold = 0, iterations = 0;
     for (int i = 0; i < 1000; ++i) {
-      wrench[6 * (model.num_moving() - 1) + 2] = -0.5 * (1.0 + std::sin(0.3 * i));
+      wrench[Model::v_offset(model.num_moving() - 1) + 2] = -0.5 * (1.0 + std::sin(0.3 * i));
       const StepReport report = Step(model, options, &state, &data, &wrench);
       cold += report.cold_restarts;
       iterations += report.iterations;
@@ -90,11 +90,11 @@ TEST(Allocation, AWarmSparseStepWithAnUnchangedPairSetAllocatesNothing) {
   options.h = 0.005;
   for (int i = 0; i < 200; ++i) ASSERT_TRUE(Step(model, options, &state, &data).converged);  // land and settle
   // A downward push that changes every step (a sideways one would roll the spheres), so that every step iterates.
-  Eigen::VectorXd wrench = Eigen::VectorXd::Zero(6 * model.num_moving());
+  Eigen::VectorXd wrench = Eigen::VectorXd::Zero(model.nv());
   const long before = g_allocations.load();
   int iterations = 0;
   for (int i = 0; i < 1000; ++i) {
-    for (int k = 0; k < model.num_moving(); ++k) wrench[6 * k + 2] = -0.5 * (1.0 + std::sin(0.3 * i + k));
+    for (int k = 0; k < model.num_moving(); ++k) wrench[Model::v_offset(k) + 2] = -0.5 * (1.0 + std::sin(0.3 * i + k));
     iterations += Step(model, options, &state, &data, &wrench).iterations;
   }
   EXPECT_EQ(g_allocations.load() - before, 0);

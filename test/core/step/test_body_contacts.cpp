@@ -37,7 +37,7 @@ TEST(BodyContacts, StackOfThreeBoxesCarriesItsWeightWithoutDrift) {
   const auto stats = testing_support::RunScene(model, 0.01, 10.0,
                                                [&](const Model& mm, const State& s, const Data& d, const StepReport&) {
     for (int i = 0; i < 3; ++i) {
-      max_drift = std::max(max_drift, (s.q.segment<3>(7 * i) - mm.bodies[1 + i].X_WB0.translation()).norm());
+      max_drift = std::max(max_drift, (s.q.segment<3>(Model::q_offset(i)) - mm.bodies[1 + i].X_WB0.translation()).norm());
     }
     // Masses 1, 2, 3 kg from the bottom: each interface carries the weight of everything above it.
     max_error = std::max({max_error, std::abs(ForceBetween(mm, d, "box0", "ground") - 6.0 * g) / (6.0 * g),

@@ -25,7 +25,7 @@ constexpr double kPi = 3.14159265358979323846;
 double TotalEnergy(const Model& model, const State& state) {
   double potential = 0.0;
   for (int k = 0; k < model.num_moving(); ++k) {
-    potential -= model.bodies[model.moving_bodies[k]].mass * model.gravity_W.dot(state.q.segment<3>(7 * k));
+    potential -= model.bodies[model.moving_bodies[k]].mass * model.gravity_W.dot(state.q.segment<3>(Model::q_offset(k)));
   }
   return KineticEnergy(model, state) + potential;
 }
@@ -189,7 +189,7 @@ TEST(Joints, TwoLinkArmPushesAnEllipsoidWithoutInterpenetrationCertifiedIndepend
       ++certified;
     }
   });
-  const double moved = (end.q.segment<3>(7 * egg) - start.q.segment<3>(7 * egg)).norm();
+  const double moved = (end.q.segment<3>(Model::q_offset(egg)) - start.q.segment<3>(Model::q_offset(egg))).norm();
   std::printf("[ joints ] arm push: egg moved %.3f m, largest forearm push %.3f N, penetration bound %.2e m over %d "
               "near pairs, drift %.2e m %.2e rad\n", moved, max_push, worst_bound, certified, position_error,
               angle_error);
@@ -216,15 +216,15 @@ double GripperSlip(const std::string& grip) {
   const Model model = LoadSceneFromString(urdf, "gripper_lift");
   const int palm = model.velocity_slot[model.FindBody("palm")], ball = model.velocity_slot[model.FindBody("ball")];
   State state = State::Initial(model);
-  const double offset0 = state.q[7 * ball + 2] - state.q[7 * palm + 2];
+  const double offset0 = state.q[Model::q_offset(ball) + 2] - state.q[Model::q_offset(palm) + 2];
   int nonconverged = 0;
   const auto stats = RunScene(model, 0.001, 0.8, [&](const Model&, const State& s, const Data&, const StepReport& r) {
     nonconverged += !r.converged;
     state = s;
   });
   EXPECT_EQ(stats.nonconverged, 0);
-  EXPECT_GT(state.q[7 * palm + 2] - 0.56, 0.5);  // the palm rose (1.2 g - g = 0.2 g upwards: 0.63 m if it holds)
-  return offset0 - (state.q[7 * ball + 2] - state.q[7 * palm + 2]);
+  EXPECT_GT(state.q[Model::q_offset(palm) + 2] - 0.56, 0.5);  // the palm rose (1.2 g - g = 0.2 g upwards: 0.63 m if it holds)
+  return offset0 - (state.q[Model::q_offset(ball) + 2] - state.q[Model::q_offset(palm) + 2]);
 }
 
 TEST(Joints, PrismaticGripperHoldsTheSphereExactlyWhenFrictionCanCarryIt) {

@@ -27,7 +27,7 @@ void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, b
   }
   State start = State::Initial(model);
   for (int i = 0; i < start.v.size(); ++i) start.v[i] = 2.0 * u(rng);
-  const Eigen::VectorXd wrench = Eigen::VectorXd::Constant(6 * model.num_moving(), 0.3);
+  const Eigen::VectorXd wrench = Eigen::VectorXd::Constant(model.nv(), 0.3);
   problem.BeginStep(start, 0.05, &wrench);
   problem.ResetTangentAxes(z);
 

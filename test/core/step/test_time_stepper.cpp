@@ -28,7 +28,7 @@ Model SphereAboveGround(double height) {
 }
 
 TEST(TimeStepper, SeparatedContactIsExactFreeFall) {
-  // Normal force 0 leaves the paper's friction rows degenerate (DESIGN.md pitfall 2); the step must still converge
+  // Normal force 0 leaves the paper's friction rows degenerate (doc/method.md, pitfall 2); the step must still converge
   // and reproduce implicit Euler free fall exactly: v_k = -g h k, z_k = z0 - g h^2 k (k + 1) / 2.
   const Model model = SphereAboveGround(2.0);
   const double h = 0.01, g = 9.81;
@@ -88,7 +88,7 @@ TEST(TimeStepper, DroppedSphereLandsWithoutPenetratingAndComesToRest) {
 }
 
 TEST(TimeStepper, BoxRestingOnAFaceHoldsItsWeightWithoutDrift) {
-  // Flat face on a plane: the closest point is not unique along the face (DESIGN.md pitfall 6); Newton-Euler picks
+  // Flat face on a plane: the closest point is not unique along the face (doc/method.md, pitfall 6); Newton-Euler picks
   // the equivalent contact point. The box must stay put and carry its weight.
   Model m;
   m.bodies.push_back(FixedBody("ground", MakeHalfSpace()));
@@ -280,7 +280,7 @@ namespace {
 TEST(TimeStepper, RockingEllipsoidLosesEnergyLikeBackwardEulerAndNeverGainsAny) {
   // An ellipsoid (0.2, 0.1, 0.06 m) tilted 0.2 rad about y rocks on the ground with angular frequency w of about
   // 21 rad/s. Taking the geometry at the end of the step acts like backward Euler: about (h w)^2 of the rocking
-  // energy goes per step (DESIGN.md pitfall 7), so after 10 s at h = 1 ms about exp(-4.4) ~ 1 % is left.
+  // energy goes per step (doc/method.md, pitfall 7), so after 10 s at h = 1 ms about exp(-4.4) ~ 1 % is left.
   Model m;
   m.bodies.push_back(FixedBody("ground", MakeHalfSpace()));
   Body egg = MovingBody("egg", MakeEllipsoid(Vec3(0.2, 0.1, 0.06)), 1.0, Pose::Identity());

@@ -3,6 +3,8 @@
 // points and that no step end interpenetrates; the stepper uses it to seed the closest points of a new pair.
 #pragma once
 
+#include <algorithm>
+
 #include "implicit_sim/core/geometry/shapes.h"
 
 namespace implicit_sim {
@@ -28,5 +30,13 @@ double SupportValue(const ConvexShape& shape, const Pose& X_WB, const Vec3& u_W)
 // far each body crosses that plane, summed (m, >= 0). Translating body 1 by that amount along n separates them.
 double PenetrationBound(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2, const Pose& X_WB2,
                         const Vec3& p_W, const Vec3& n_W);
+
+// The same bound from any support functions of the two bodies, support_k(u) = max { u . x : x in body k } (m): how
+// far body 2 reaches beyond the plane along n, plus how far body 1 reaches below it. n_W must be a unit vector.
+template <typename Support1, typename Support2>
+double PlaneCrossingBound(const Support1& support1, const Support2& support2, const Vec3& p_W, const Vec3& n_W) {
+  const double np = n_W.dot(p_W);
+  return std::max(0.0, np + support1(-n_W)) + std::max(0.0, support2(n_W) - np);
+}
 
 }  // namespace implicit_sim

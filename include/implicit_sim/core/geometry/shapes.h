@@ -2,7 +2,7 @@
 //
 // Every inequality is written in its own frame P, posed in the shape (body) frame S by X_SP. Each one is scaled so
 // that |grad f| is about 1 on its surface: f is then roughly a signed distance in metres near the surface, which keeps
-// the complementarity rows of the step well scaled (DESIGN.md pitfall 8).
+// the complementarity rows of the step well scaled (doc/method.md, pitfall 8).
 #pragma once
 
 #include <string>

@@ -1,4 +1,4 @@
-// The S1 scaling scene of ../shared/scenarios/SCENARIOS.md as a generator: N spheres (r = 0.05 m) or ellipsoids
+// The S1 scaling scene (doc/scenes.md) as a generator: N spheres (r = 0.05 m) or ellipsoids
 // (semi-axes 0.06, 0.05, 0.04 m), 0.1 kg each, at rest in a 1 m x 1 m box (a floor z = 0 and four walls at
 // x, y = +-0.5, all half-spaces), mu = 0.5 (e_t = e_o = 1, e_r = 0.01 m: not given by the scenario).
 // Body i: layer = i / 64, row = (i / 8) % 8, col = i % 8;

@@ -1,5 +1,5 @@
 // Headless outputs of a run: the trajectory CSV (one row per step, t = 0 included) and the summary JSON.
-// Column names are a contract (README.md): t; per moving body B: B.x B.y B.z B.qw B.qx B.qy B.qz B.vx B.vy B.vz
+// Column names are a contract (doc/runner.md): t; per moving body B: B.x B.y B.z B.qw B.qx B.qy B.qz B.vx B.vy B.vz
 // B.wx B.wy B.wz; per joint J with a coordinate (not fixed): J.q J.qd J.limit (position rad or m, velocity, limit
 // effort N m or N); per pair P = <link1>-<link2>: P.gap P.fn P.ft P.mr P.slip (only when every pair is in every NCP, see
 // Data::PairSelection); step.iterations step.residual step.converged; energy.kinetic energy.potential (J; potential

@@ -14,8 +14,8 @@ struct State {
 
   static State Initial(const Model& model);
   Pose X_WB(const Model& model, int body) const;  // fixed bodies: their constant pose
-  Vec3 v_WB(int slot) const { return v.segment<3>(6 * slot); }
-  Vec3 w_WB(int slot) const { return v.segment<3>(6 * slot + 3); }
+  Vec3 v_WB(int slot) const { return v.segment<3>(Model::v_offset(slot)); }
+  Vec3 w_WB(int slot) const { return v.segment<3>(Model::v_offset(slot) + 3); }
 };
 
 double KineticEnergy(const Model& model, const State& state);  // J

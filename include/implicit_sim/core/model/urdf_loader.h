@@ -7,7 +7,7 @@
 //                           <body link=".." velocity="vx vy vz" angular_velocity="wx wy wz"
 //                                 force="fx fy fz" torque="tx ty tz" locked="y rx rz"/>
 //                         </implicit_sim>
-// README.md documents every element and attribute with units and allowed ranges.
+// doc/scenes.md documents every element and attribute with units and allowed ranges.
 #pragma once
 
 #include <string>

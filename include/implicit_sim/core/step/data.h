@@ -38,7 +38,7 @@ class Data {
   enum class PairSelection { kAuto, kAllPairs, kBroadPhase };
   static constexpr int kAllPairsLimit = 16;
   // NCPs with more unknowns than this are solved in sparse mode (see semismooth_newton.h) even with every pair in
-  // them: a 1000-gon disc has one pair with about 1000 unknowns, whose dense LU took seconds per step.
+  // them: a 1000-gon disc has one pair with about 1000 unknowns, whose dense LU costs O(n^3) per iteration.
   static constexpr int kDenseSizeLimit = 200;
   explicit Data(const Model& model, PairSelection selection = PairSelection::kAuto);
   // Whether this Data was built from `model` (the very object: the step problem and the broad phase refer to it).

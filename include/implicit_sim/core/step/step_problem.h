@@ -1,5 +1,5 @@
 // The mixed nonlinear complementarity problem of one geometrically implicit step (paper eq. 10-11 and Appendix
-// eq. 19-22), in the normal-distance form of DESIGN.md section 2, reformulated with the Fischer-Burmeister function.
+// eq. 19-22), in the normal-distance form of doc/method.md (pitfall 1), reformulated with the Fischer-Burmeister function.
 //
 // Unknowns z (everything at the END of the step):
 //   per moving body (slot k): nu_k = (v_WB, w_WB), 6 values, at z[6k].
@@ -28,7 +28,7 @@
 //                   zeta = 1 - s_t^2 - s_o^2 - s_r^2 (the friction ellipsoid of eq. 5 divided by (mu ln)^2)
 // Why the normalized friction unknowns (an improvement on the paper's p_t, p_o, p_r): with forces as unknowns a
 // separated contact (ln = 0) leaves sigma and the friction forces undetermined and Newton converges only linearly
-// there (DESIGN.md pitfall 2). With fractions, sigma equals the generalized slip speed even at a separated
+// there (doc/method.md, pitfall 2). With fractions, sigma equals the generalized slip speed even at a separated
 // contact and every friction row keeps a regular Jacobian; for ln > 0 the two forms are equivalent.
 // Body 1 and body 2 are at their end-of-step poses p = p0 + h v, R = Exp(h w) R0 (paper eq. 2), so every
 // geometric quantity depends on nu: that is what makes the step geometrically implicit.
@@ -90,7 +90,7 @@ class StepProblem final : public NcpProblem {
   void BeginStep(const State& start, double h, const Eigen::VectorXd* external_wrench_W);
 
   // The tangent basis (t, o) of a pair is built from n and a world reference axis fixed for the whole step
-  // (DESIGN.md pitfall 3). UpdateTangentAxes keeps each pair's axis while |axis . n| < 0.9 for the normal in *z and
+  // (doc/method.md, pitfall 3). UpdateTangentAxes keeps each pair's axis while |axis . n| < 0.9 for the normal in *z and
   // otherwise switches to the world axis least aligned with n, re-expressing s_t, s_o of *z in the new basis so that
   // a warm start stays a warm start. ResetTangentAxes picks the least aligned axis for every pair.
   void UpdateTangentAxes(Eigen::VectorXd* z);
