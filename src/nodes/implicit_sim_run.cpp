@@ -22,9 +22,8 @@ constexpr const char* kUsage =
 
 struct Args {
   std::string scene, out;
-  double duration = 0.0, dt = 0.01;
-  implicit_sim::NewtonOptions newton;
-  implicit_sim::StepperOptions::Solver solver = implicit_sim::StepperOptions::Solver::kNewton;
+  double duration = 0.0;
+  implicit_sim::StepperOptions options;  // --dt, --tolerance, --max-iterations, --solver: rows of the options table
   bool stop_at_rest = false;
   double rest_energy = 0.0;  // J: "at rest" means kinetic energy < rest_energy
   double rest_hold = 0.0;    // s: ... at every step over this much simulated time
@@ -58,6 +57,20 @@ std::string OneLine(const std::string& message) {
   return line;
 }
 
+// The flags of the options table (--dt, --tolerance, ...), each checked against its row's range.
+void ParseStepperFlags(const std::map<std::string, std::string>& values, implicit_sim::StepperOptions* options) {
+  for (const implicit_sim::OptionRow& row : implicit_sim::OptionTable()) {
+    const auto it = values.find(row.runner_flag);
+    if (*row.runner_flag == '\0' || it == values.end()) continue;
+    double value = 0.0;
+    std::string error;
+    if (!implicit_sim::ParseOptionValue(row, it->second, row.runner_flag, &value, &error)) {
+      throw std::invalid_argument(error);
+    }
+    row.set(options, value);
+  }
+}
+
 Args ParseArgs(int argc, char** argv) {
   std::map<std::string, std::string> values;
   for (int i = 1; i < argc; ++i) {
@@ -66,8 +79,8 @@ Args ParseArgs(int argc, char** argv) {
       std::cout << kUsage << "\n";
       std::exit(0);
     }
-    if (flag != "--scene" && flag != "--duration" && flag != "--dt" && flag != "--out" && flag != "--tolerance" &&
-        flag != "--max-iterations" && flag != "--solver" && flag != "--stop-at-rest") {
+    if (flag != "--scene" && flag != "--duration" && flag != "--out" && flag != "--stop-at-rest" &&
+        !implicit_sim::FindOptionByRunnerFlag(flag)) {
       throw std::invalid_argument("unknown flag '" + flag + "' (" + kUsage + ")");
     }
     if (i + 1 >= argc) throw std::invalid_argument(flag + " needs a value");
@@ -80,25 +93,7 @@ Args ParseArgs(int argc, char** argv) {
   args.scene = values["--scene"];
   args.out = values["--out"];
   args.duration = ParsePositive("--duration", values["--duration"]);
-  if (values.count("--dt")) args.dt = ParsePositive("--dt", values["--dt"]);
-  CheckAtMost("--dt", args.dt, 1.0);  // s
-  if (values.count("--tolerance")) args.newton.tolerance = ParsePositive("--tolerance", values["--tolerance"]);
-  if (args.newton.tolerance >= 1.0) {
-    throw std::invalid_argument("--tolerance must be < 1, got " + implicit_sim::FormatNumber(args.newton.tolerance));
-  }
-  if (values.count("--max-iterations")) {
-    const double n = ParsePositive("--max-iterations", values["--max-iterations"]);
-    if (n != std::floor(n) || n > 100000) throw std::invalid_argument("--max-iterations must be an integer in [1, 100000]");
-    args.newton.max_iterations = static_cast<int>(n);
-  }
-  if (values.count("--solver")) {
-    const std::string& solver = values["--solver"];
-    if (solver != "newton" && solver != "ipopt") {
-      throw std::invalid_argument("--solver must be newton or ipopt, got '" + solver + "'");
-    }
-    args.solver = solver == "ipopt" ? implicit_sim::StepperOptions::Solver::kIpopt
-                                    : implicit_sim::StepperOptions::Solver::kNewton;
-  }
+  ParseStepperFlags(values, &args.options);
   if (values.count("--stop-at-rest")) {
     const std::string& text = values["--stop-at-rest"];
     const size_t colon = text.find(':');
@@ -112,7 +107,7 @@ Args ParseArgs(int argc, char** argv) {
     CheckAtMost("--stop-at-rest hold time S (s, in E:S)", args.rest_hold, 1e6);
     args.stop_at_rest = true;
   }
-  if (args.duration / args.dt > 1e8) throw std::invalid_argument("--duration / --dt exceeds 1e8 steps");
+  if (args.duration / args.options.h > 1e8) throw std::invalid_argument("--duration / --dt exceeds 1e8 steps");
   return args;
 }
 
@@ -125,9 +120,7 @@ int main(int argc, char** argv) {
   Model model;
   try {
     args = ParseArgs(argc, argv);
-    options.h = args.dt;
-    options.newton = args.newton;
-    options.solver = args.solver;
+    options = args.options;
     std::string error;
     if (!options.IsValid(&error)) throw std::invalid_argument(error);
     model = LoadSceneFromFile(args.scene);

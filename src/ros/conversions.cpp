@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "implicit_sim/core/base/format.h"
+#include "implicit_sim/core/step/time_stepper.h"
 
 namespace implicit_sim {
 namespace ros_conversions {
@@ -98,14 +99,10 @@ geometry_msgs::Transform ToTransformMsg(const Pose& X) {
 Vec3 ToVec3(const geometry_msgs::Vector3& v) { return Vec3(v.x, v.y, v.z); }
 Vec3 ToVec3(const geometry_msgs::Point& p) { return Vec3(p.x, p.y, p.z); }
 
-Pose LinkPose(const Model& model, const State& state, int body) {
-  return state.X_WB(model, body) * model.bodies[body].X_BL;
-}
-
 implicit_sim::BodyState ToBodyStateMsg(const Model& model, const State& state, int body) {
   implicit_sim::BodyState msg;
   msg.name = model.bodies[body].name;
-  const Pose X_WL = LinkPose(model, state, body);
+  const Pose X_WL = state.X_WL(model, body);
   msg.pose = ToPoseMsg(X_WL);
   const int slot = model.velocity_slot[body];
   if (slot >= 0) {
@@ -150,10 +147,11 @@ bool SetBodyStateFromMsg(const Model& model, int body, const implicit_sim::BodyS
     }
   }
   const Eigen::Quaterniond quat(X_WB.linear());
-  state->q.segment<3>(7 * slot) = X_WB.translation();
-  state->q.segment<4>(7 * slot + 3) << quat.w(), quat.x(), quat.y(), quat.z();
-  state->v.segment<3>(6 * slot) = v_B;
-  state->v.segment<3>(6 * slot + 3) = w;
+  const int iq = Model::q_offset(slot), iv = Model::v_offset(slot);
+  state->q.segment<3>(iq) = X_WB.translation();
+  state->q.segment<4>(iq + 3) << quat.w(), quat.x(), quat.y(), quat.z();
+  state->v.segment<3>(iv) = v_B;
+  state->v.segment<3>(iv + 3) = w;
   return true;
 }
 
@@ -170,6 +168,80 @@ implicit_sim::ContactState ToContactMsg(const Model& model, int pair, const Cont
   msg.torsional_moment = c.torsional_moment;
   msg.slip_speed = c.slip_speed;
   return msg;
+}
+
+implicit_sim::BodyStates ToBodyStatesMsg(const Model& model, const State& state, const ros::Time& stamp,
+                                         const std::string& world_frame) {
+  implicit_sim::BodyStates msg;
+  msg.header.stamp = stamp;
+  msg.header.frame_id = world_frame;
+  for (int b : model.moving_bodies) msg.bodies.push_back(ToBodyStateMsg(model, state, b));
+  for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
+    if (model.bodies[b].is_fixed) msg.bodies.push_back(ToBodyStateMsg(model, state, b));
+  }
+  return msg;
+}
+
+implicit_sim::Contacts ToContactsMsg(const Model& model, const std::vector<ContactResult>& contacts, double threshold,
+                                     const ros::Time& stamp, const std::string& world_frame) {
+  implicit_sim::Contacts msg;
+  msg.header.stamp = stamp;
+  msg.header.frame_id = world_frame;
+  for (const ContactResult& contact : contacts) {
+    if (IsActiveContact(contact, threshold)) msg.contacts.push_back(ToContactMsg(model, contact.pair, contact));
+  }
+  return msg;
+}
+
+implicit_sim::StepStats ToStepStatsMsg(const StepReport& r, double sim_time, uint64_t step, double rtf,
+                                       const std::string& world_frame) {
+  implicit_sim::StepStats msg;
+  msg.header.stamp.fromSec(sim_time);
+  msg.header.frame_id = world_frame;
+  msg.step = step;
+  msg.converged = r.converged;
+  msg.advanced = r.advanced;
+  msg.status = !r.advanced ? "failed" : r.converged ? "converged" : "not converged";
+  msg.iterations = r.iterations;
+  msg.residual = r.residual;
+  msg.complementarity_error = r.complementarity_error;
+  msg.active_contacts = r.active_contacts;
+  msg.cold_restarts = r.cold_restarts;
+  msg.smoothed_solves = r.smoothed_solves;
+  msg.ipopt_solves = r.ipopt_solves;
+  msg.substeps = r.substeps;
+  msg.wall_time = r.wall_time_s;
+  msg.real_time_factor = rtf;
+  return msg;
+}
+
+std::vector<geometry_msgs::TransformStamped> ToLinkTransforms(const Model& model, const State& state,
+                                                              const std::vector<char>& on_tf, const ros::Time& stamp,
+                                                              const std::string& world_frame) {
+  std::vector<geometry_msgs::TransformStamped> transforms;
+  for (int b : model.moving_bodies) {
+    if (!on_tf[b]) continue;
+    geometry_msgs::TransformStamped t;
+    t.header.stamp = stamp;
+    t.header.frame_id = world_frame;
+    t.child_frame_id = model.bodies[b].name;
+    t.transform = ToTransformMsg(state.X_WL(model, b));
+    transforms.push_back(t);
+  }
+  return transforms;
+}
+
+std::vector<geometry_msgs::TransformStamped> ToStaticTransforms(const Model& model, const std::string& world_frame) {
+  std::vector<geometry_msgs::TransformStamped> transforms;
+  for (const Body& body : model.bodies) {
+    if (!body.is_fixed) continue;
+    geometry_msgs::TransformStamped t;
+    t.header.frame_id = world_frame;
+    t.child_frame_id = body.name;
+    t.transform = ToTransformMsg(body.X_WB0 * body.X_BL);
+    transforms.push_back(t);
+  }
+  return transforms;
 }
 
 visualization_msgs::MarkerArray ShapeMarkers(const Model& model) {

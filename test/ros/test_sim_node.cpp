@@ -327,6 +327,19 @@ TEST(SimNode, ABadParameterOrSceneStopsTheNodeAtStartup) {
   EXPECT_NE(out.find("~scene"), std::string::npos) << out;
 }
 
+// Solver parameters go through the core's options table: an integer parameter given as a non-integer double is
+// refused (roscpp would round it), and the Newton tolerance is in (0, 0.1] as for the core and the runner.
+TEST(SimNode, SolverParametersAreCheckedAgainstTheOptionsTable) {
+  for (const std::string& param : {std::string("_max_iterations:=1.5"), std::string("_tolerance:=0.5")}) {
+    int code = 0;
+    const std::string out = RunCommand(std::string("timeout 30 ") + IMPLICIT_SIM_NODE +
+                                           " __name:=bad_option _scene:=p3_sphere_on_two_spheres " + param,
+                                       &code);
+    EXPECT_EQ(code, 1) << out;
+    EXPECT_NE(out.find("~" + param.substr(1, param.find(':') - 1)), std::string::npos) << out;
+  }
+}
+
 TEST(SimNode, ReadsTheSceneFromRobotDescriptionWhenNoSceneIsGiven) {
   std::ifstream file(std::string(IMPLICIT_SIM_SOURCE_DIR) + "/scenes/p2_sphere_spinning.urdf");
   std::stringstream xml;

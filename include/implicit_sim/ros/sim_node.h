@@ -1,8 +1,11 @@
 // The ROS node over the core: steps on its own thread, publishes /clock, /tf, /tf_static, ~contacts, ~markers,
 // ~step_stats, ~body_states and /diagnostics, and serves a gazebo_ros-like control API. doc/ros_node.md documents the
-// contract (topics, services, parameters).
+// contract (topics, services, parameters). By concern: sim_node.cpp (construction, threads, stepping),
+// node_params.cpp (parameters), node_services.cpp (services and command topics, joints included) and
+// node_publishers.cpp (topics and diagnostics).
 #pragma once
 
+#include <chrono>
 #include <condition_variable>
 #include <mutex>
 #include <string>
@@ -16,6 +19,7 @@
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
+#include <visualization_msgs/MarkerArray.h>
 
 #include "implicit_sim/ApplyBodyWrench.h"
 #include "implicit_sim/BodyWrench.h"
@@ -25,37 +29,13 @@
 #include "implicit_sim/Step.h"
 #include "implicit_sim/core/model/model.h"
 #include "implicit_sim/core/step/time_stepper.h"
+#include "implicit_sim/ros/node_params.h"
 
 namespace implicit_sim {
 
 // The largest command the node accepts: |force| (N), |torque| (N m) and |joint effort| (N m or N). Larger commands
 // are refused; they only drive a step into divergence.
 constexpr double kMaxCommand = 1e9;
-
-// Node parameters (private namespace ~), validated at startup.
-struct NodeParams {
-  std::string scene;              // scene file path, or a name resolved as <scenes_dir>/<name>.urdf; "" -> robot_description
-  std::string scenes_dir;         // where scene names are looked up
-  double time_step = 0.01;        // s, (0, 1]
-  double tolerance = 1e-12;       // Newton tolerance on the scaled residual, (0, 0.1]
-  int max_iterations = 100;       // [1, 100000]
-  std::string solver = "newton";  // newton or ipopt
-  double publish_rate = 30.0;     // Hz, (0, 1000]: /tf, ~body_states, ~contacts, ~markers
-  double real_time_factor = 1.0;  // [0, 1000]; 0 = as fast as possible
-  bool paused = false;
-  // What a refused step (initial overlap, divergence, no finite solution) does after the state is restored: "pause"
-  // the simulation, or "reset" the bodies to their initial state and run on (pausing instead if the initial state
-  // itself is refused).
-  std::string on_fault = "pause";
-  std::string world_frame = "world";
-  double force_marker_scale = 0.05;  // m/N, (0, 100]: length of a contact force arrow per newton
-  double contact_marker_size = 0.05;  // m, (0, 100]: diameter of a contact point (arrows scale with it)
-  // Whether /tf carries the links that hang on joints (world -> link, like every other body). Set false to leave them
-  // to robot_state_publisher fed by /joint_states (it publishes parent -> child along the URDF tree).
-  bool publish_joint_link_tf = true;
-  // Reads and validates; throws std::invalid_argument naming the parameter and its range.
-  static NodeParams Read(const ros::NodeHandle& pnh);
-};
 
 class SimNode {
  public:
@@ -73,17 +53,45 @@ class SimNode {
     double start, end;   // simulation time (s); end < 0: until cleared
   };
 
+  // What the publish thread copies out under the mutex, once per cycle.
+  struct Snapshot {
+    State state;
+    std::vector<ContactResult> contacts;
+    Eigen::VectorXd efforts;  // per model joint (N m or N)
+    double sim_time = 0.0;    // s
+  };
+  // What the publish thread keeps from one cycle to the next (touched by it only).
+  struct PublishMemory {
+    visualization_msgs::MarkerArray shapes;  // the shape markers, built once
+    std::vector<char> on_tf;                 // per body: whether /tf carries its link
+    std::vector<int> shown_pairs, active_pairs;  // pairs with contact markers: last published, current
+    double last_tf_time = -1.0;              // s, simulation time of the last /tf
+    std::chrono::steady_clock::time_point last_tf_wall, last_diagnostics;
+  };
+
   double SimTime() const { return time_offset_ + state_.t; }
+  // sim_node.cpp: stepping and threads.
   void StepLocked();                 // one step with the active wrenches; mutex held
   void ResetLocked();                // bodies back to the initial state, warm start and wrenches cleared; mutex held
   void ComputeWrenchesLocked();      // fills wrench_W_ for the step starting now
   void PhysicsLoop();
   void PublishLoop();
+  bool TakeSnapshot(Snapshot* snapshot);  // false once shutting down
+  // node_publishers.cpp: one function per topic.
+  void AdvertiseTopics();
   void PublishClock(double sim_time);
   void PublishStepStats(const StepReport& report, double sim_time, uint64_t step, double rtf);
+  void PublishStaticTf();
+  void PublishTf(const Snapshot& snapshot, const ros::Time& stamp, PublishMemory* memory);
+  void PublishBodyStates(const Snapshot& snapshot, const ros::Time& stamp);
+  void PublishContacts(const Snapshot& snapshot, const ros::Time& stamp);
+  void PublishMarkers(const Snapshot& snapshot, const ros::Time& stamp, PublishMemory* memory);
+  void PublishJointStates(const State& snapshot, const Eigen::VectorXd& efforts, const ros::Time& stamp);
+  void PublishDiagnostics(PublishMemory* memory);  // at most once a second
   void UpdateDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status);
+  // node_services.cpp: services and command topics.
+  void AdvertiseServices();
   int FindBodyOrFail(const std::string& name, bool must_move, std::string* error) const;
-
   bool OnPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
   bool OnUnpause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
   bool OnReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
@@ -93,12 +101,11 @@ class SimNode {
   bool OnSetBodyState(implicit_sim::SetBodyState::Request& req, implicit_sim::SetBodyState::Response& res);
   bool OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req, implicit_sim::ApplyBodyWrench::Response& res);
   void OnWrenchCommand(const implicit_sim::BodyWrench::ConstPtr& msg);
-  // Joints (sim_node_joints.cpp): ~joint_effort_cmd, ~set_joint_efforts and /joint_states.
+  // Joints: ~joint_effort_cmd and ~set_joint_efforts.
   bool SetJointEffortsLocked(const std::vector<std::string>& names, const std::vector<double>& efforts,
                              std::string* error);  // all or nothing
   void OnJointEffortCommand(const sensor_msgs::JointState::ConstPtr& msg);
   bool OnSetJointEfforts(implicit_sim::SetJointEfforts::Request& req, implicit_sim::SetJointEfforts::Response& res);
-  void PublishJointStates(const State& snapshot, const Eigen::VectorXd& efforts, const ros::Time& stamp);
 
   ros::NodeHandle nh_, pnh_;
   NodeParams params_;
@@ -115,8 +122,9 @@ class SimNode {
   uint64_t step_count_ = 0;
   StepReport last_report_;
   std::vector<TimedWrench> wrenches_;
-  Eigen::VectorXd commanded_W_;   // ~wrench_cmd, per moving slot: force, torque at the link origin (world)
-  Eigen::VectorXd wrench_W_;      // the wrench vector handed to the core (at the centre of mass)
+  Eigen::VectorXd commanded_W_;   // ~wrench_cmd, per moving slot (Model::v_offset): f_W (N), tau_W (N m) at the link
+                                  // origin
+  Eigen::VectorXd wrench_W_;      // the wrench vector handed to the core (at the centre of mass; core/model/wrench.h)
   Eigen::VectorXd joint_efforts_;  // per model joint: the commanded effort (N m or N; fixed joints 0)
   long received_joint_commands_ = 0, dropped_joint_commands_ = 0;
   long diag_steps_ = 0, diag_nonconverged_ = 0, diag_failed_ = 0, dropped_commands_ = 0, received_commands_ = 0;

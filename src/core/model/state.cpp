@@ -29,6 +29,8 @@ Pose State::X_WB(const Model& model, int body) const {
   return X;
 }
 
+Pose State::X_WL(const Model& model, int body) const { return X_WB(model, body) * model.bodies[body].X_BL; }
+
 double KineticEnergy(const Model& model, const State& state) {
   double energy = 0.0;
   for (int k = 0; k < model.num_moving(); ++k) {

@@ -1,31 +1,9 @@
 #include "implicit_sim/core/ncp/semismooth_newton.h"
 
-#include "implicit_sim/core/base/format.h"  // locale-independent numbers in messages
-
 #include <algorithm>
 #include <cmath>
 
 namespace implicit_sim {
-
-bool NewtonOptions::IsValid(std::string* error) const {
-  if (!(tolerance > 0.0 && tolerance < 1.0)) {
-    *error = "solver tolerance must be in (0, 1), got " + FormatNumber(tolerance);
-    return false;
-  }
-  if (max_iterations < 1 || max_iterations > 100000) {
-    *error = "solver max_iterations must be in [1, 100000], got " + std::to_string(max_iterations);
-    return false;
-  }
-  if (!(sparse_regularization >= 0.0 && sparse_regularization < 1.0)) {
-    *error = "solver sparse_regularization must be in [0, 1), got " + FormatNumber(sparse_regularization);
-    return false;
-  }
-  if (!(lm_damping >= 0.0 && lm_damping < 1.0)) {
-    *error = "solver lm_damping must be in [0, 1), got " + FormatNumber(lm_damping);
-    return false;
-  }
-  return true;
-}
 
 SemismoothNewton::SemismoothNewton(int n, bool sparse) : sparse_(sparse) { Resize(n); }
 

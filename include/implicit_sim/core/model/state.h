@@ -14,6 +14,7 @@ struct State {
 
   static State Initial(const Model& model);
   Pose X_WB(const Model& model, int body) const;  // fixed bodies: their constant pose
+  Pose X_WL(const Model& model, int body) const;  // the body's URDF link frame L in the world: X_WB * Body::X_BL
   Vec3 v_WB(int slot) const { return v.segment<3>(Model::v_offset(slot)); }
   Vec3 w_WB(int slot) const { return v.segment<3>(Model::v_offset(slot) + 3); }
 };

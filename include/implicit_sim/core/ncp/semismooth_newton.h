@@ -28,8 +28,8 @@ struct NewtonOptions {
   double lm_damping = 1e-12;      // LM damping = lm_damping * max(1, 0.5 |Phi|^2)
   double armijo = 1e-4;           // sufficient decrease factor
   double min_step = 1e-10;        // smallest line-search step length
-  double sparse_regularization = 1e-9;  // delta (see above), in [0, 1)
-  bool IsValid(std::string* error) const;
+  double sparse_regularization = 1e-9;  // delta (see above)
+  // The allowed ranges are those of the step's options table (step/options.h), which validates these fields.
 };
 
 class SemismoothNewton {

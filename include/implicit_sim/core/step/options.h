@@ -1,8 +1,11 @@
 // The options of a step: time step, solver choice, tolerances and health limits. They live outside the Model and
-// validate themselves (IsValid names the option and its allowed range).
+// validate themselves through the options table below, which also gives the ROS node's parameter and the runner's
+// flag for each option (one allowed range for all three).
 #pragma once
 
+#include <array>
 #include <string>
+#include <string_view>
 
 #include "implicit_sim/core/ncp/ipopt_ncp.h"
 #include "implicit_sim/core/ncp/semismooth_newton.h"
@@ -25,6 +28,8 @@ struct StepperOptions {
   // A cold step (the first, or after a reset or a set state) refuses to start from bodies overlapping by more than
   // this (m, [0, 1]): the step's end-of-step contact would throw them apart with an impulse of overlap / h.
   double overlap_tolerance = 1e-6;
+  // Checks every row of the options table; on failure sets *error to a message naming the option, its range and
+  // unit, and the bad value.
   bool IsValid(std::string* error) const;
   // The Ipopt solver's options (its convergence bar: IpoptNcpOptions::tolerance).
   IpoptNcpOptions IpoptOptions() const {
@@ -33,5 +38,45 @@ struct StepperOptions {
     return ipopt;
   }
 };
+
+// The options table: one row per field of StepperOptions and its NewtonOptions. Values pass as doubles: integers as
+// whole numbers, a choice as the index of its name.
+enum class OptionKind { kReal, kInteger, kChoice };
+
+struct OptionRow {
+  const char* field;        // the StepperOptions field, e.g. "newton.tolerance"
+  const char* ros_param;    // the node's private parameter (~name); "" when the node has none
+  const char* runner_flag;  // implicit_sim_run's flag; "" when it has none
+  OptionKind kind;
+  double default_value;     // equals a default-constructed StepperOptions
+  double lower, upper;      // bounds; upper may be infinite (the value must still be finite)
+  bool lower_open, upper_open;
+  const char* unit;         // "" when dimensionless
+  const char* const* choices;  // kChoice: the names by index, ending with nullptr; otherwise nullptr
+  const char* description;  // one line
+  double (*get)(const StepperOptions& options);
+  void (*set)(StepperOptions* options, double value);
+};
+
+constexpr int kNumOptionRows = 14;
+const std::array<OptionRow, kNumOptionRows>& OptionTable();
+
+// The row with this field, ROS parameter or runner flag; nullptr when none (an empty name finds nothing).
+const OptionRow* FindOptionByField(std::string_view field);
+const OptionRow* FindOptionByRosParam(std::string_view name);
+const OptionRow* FindOptionByRunnerFlag(std::string_view flag);
+
+// "(0, 0.1]", "[1, 100000]", "[0, inf)" or, for a choice, "newton or ipopt".
+std::string OptionRangeText(const OptionRow& row);
+
+// Whether `value` is allowed for the row (finite, within the bounds, whole for integers, an index for choices). When
+// not, sets *error to "<label> must be ..., got <value>"; label names the option as its user wrote it (the field,
+// "parameter ~tolerance", "--tolerance"). Allocates nothing when the value is allowed.
+bool CheckOptionValue(const OptionRow& row, double value, std::string_view label, std::string* error);
+
+// Reads `text` for the row: a choice's name, or a number with '.' as the decimal point whatever the locale; then
+// checks it as CheckOptionValue does.
+bool ParseOptionValue(const OptionRow& row, const std::string& text, std::string_view label, double* value,
+                      std::string* error);
 
 }  // namespace implicit_sim

@@ -1,0 +1,95 @@
+// Reading and validating the node's parameters.
+#include "implicit_sim/ros/node_params.h"
+
+#include <cmath>
+#include <fstream>
+#include <stdexcept>
+
+#include "implicit_sim/core/base/format.h"
+#include "implicit_sim/core/model/urdf_loader.h"
+
+namespace implicit_sim {
+namespace {
+
+template <typename T>
+T ReadParam(const ros::NodeHandle& pnh, const std::string& name, T fallback) {
+  T value = fallback;
+  if (pnh.hasParam(name) && !pnh.getParam(name, value)) {
+    throw std::invalid_argument("parameter ~" + name + " has the wrong type");
+  }
+  return value;
+}
+
+void CheckRange(const std::string& name, double value, double lo, double hi, bool lo_open, const std::string& unit) {
+  const bool ok = std::isfinite(value) && (lo_open ? value > lo : value >= lo) && value <= hi;
+  if (!ok) {
+    throw std::invalid_argument("parameter ~" + name + " = " + FormatNumber(value) + " is out of range " +
+                                (lo_open ? "(" : "[") + FormatNumber(lo) + ", " + FormatNumber(hi) + "] " + unit);
+  }
+}
+
+// The solver parameters, through the options table: a number is read as a double (an integer parameter given as a
+// double must be whole: roscpp's int reading would round 1.5 to 2), a choice as a string.
+void ReadOptionParams(const ros::NodeHandle& pnh, StepperOptions* options) {
+  for (const OptionRow& row : OptionTable()) {
+    if (*row.ros_param == '\0' || !pnh.hasParam(row.ros_param)) continue;
+    const std::string label = std::string("parameter ~") + row.ros_param;
+    double value = 0.0;
+    std::string error;
+    if (row.kind == OptionKind::kChoice) {
+      const std::string text = ReadParam<std::string>(pnh, row.ros_param, "");
+      if (!ParseOptionValue(row, text, label, &value, &error)) throw std::invalid_argument(error);
+    } else {
+      value = ReadParam<double>(pnh, row.ros_param, 0.0);
+      if (!CheckOptionValue(row, value, label, &error)) throw std::invalid_argument(error);
+    }
+    row.set(options, value);
+  }
+}
+
+}  // namespace
+
+NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
+  NodeParams p;
+  p.scene = ReadParam<std::string>(pnh, "scene", "");
+  p.scenes_dir = ReadParam<std::string>(pnh, "scenes_dir", IMPLICIT_SIM_SCENES_DIR);
+  ReadOptionParams(pnh, &p.options);
+  p.publish_rate = ReadParam(pnh, "publish_rate", p.publish_rate);
+  p.real_time_factor = ReadParam(pnh, "real_time_factor", p.real_time_factor);
+  p.paused = ReadParam(pnh, "paused", p.paused);
+  p.on_fault = ReadParam(pnh, "on_fault", p.on_fault);
+  if (p.on_fault != "pause" && p.on_fault != "reset") {
+    throw std::invalid_argument("parameter ~on_fault = '" + p.on_fault + "' must be pause or reset");
+  }
+  p.world_frame = ReadParam(pnh, "world_frame", p.world_frame);
+  p.force_marker_scale = ReadParam(pnh, "force_marker_scale", p.force_marker_scale);
+  p.contact_marker_size = ReadParam(pnh, "contact_marker_size", p.contact_marker_size);
+  p.publish_joint_link_tf = ReadParam(pnh, "publish_joint_link_tf", p.publish_joint_link_tf);
+  CheckRange("publish_rate", p.publish_rate, 0.0, 1000.0, true, "Hz");
+  CheckRange("real_time_factor", p.real_time_factor, 0.0, 1000.0, false, "(0: as fast as possible)");
+  CheckRange("force_marker_scale", p.force_marker_scale, 0.0, 100.0, true, "m/N");
+  CheckRange("contact_marker_size", p.contact_marker_size, 0.0, 100.0, true, "m");
+  if (p.world_frame.empty()) throw std::invalid_argument("parameter ~world_frame must not be empty");
+  std::string error;
+  if (!p.options.IsValid(&error)) throw std::invalid_argument(error);
+  return p;
+}
+
+Model LoadNodeScene(const ros::NodeHandle& nh, const NodeParams& p) {
+  if (!p.scene.empty()) {
+    const bool is_path = p.scene.find('/') != std::string::npos ||
+                         (p.scene.size() > 5 && p.scene.substr(p.scene.size() - 5) == ".urdf");
+    const std::string path = is_path ? p.scene : p.scenes_dir + "/" + p.scene + ".urdf";
+    if (!std::ifstream(path)) {
+      throw std::invalid_argument("parameter ~scene = '" + p.scene + "': no scene file '" + path + "'");
+    }
+    return LoadSceneFromFile(path);
+  }
+  std::string xml;
+  if (!nh.getParam("robot_description", xml)) {
+    throw std::invalid_argument("no scene: set ~scene (file path or scene name) or the robot_description parameter");
+  }
+  return LoadSceneFromString(xml, "robot_description");
+}
+
+}  // namespace implicit_sim
