@@ -18,6 +18,7 @@ using Ipopt::Number;
 
 class PenaltyNlp : public CapturingTnlp {
  public:
+  int evaluations() const { return evaluations_; }
   PenaltyNlp(const NcpProblem& problem, const Eigen::VectorXd& z0) : CapturingTnlp(z0), problem_(problem), z0_(z0) {
     raw_mode_.raw = true;
     const int n = problem.size();
@@ -107,6 +108,7 @@ class PenaltyNlp : public CapturingTnlp {
     if (new_x || !evaluated_) {
       problem_.EvaluateSparse(Eigen::Map<const Eigen::VectorXd>(x, n), raw_mode_, &raw_, &jacobian_);
       evaluated_ = true;
+      ++evaluations_;
     }
     const Eigen::SparseMatrix<double>& J = jacobian_.matrix;
     return raw_.allFinite() && std::all_of(J.valuePtr(), J.valuePtr() + J.nonZeros(), [](double v) {
@@ -120,6 +122,7 @@ class PenaltyNlp : public CapturingTnlp {
   SparseJacobian jacobian_;  // the pattern is fixed for the solve: every entry is emitted at every evaluation
   std::vector<double> scale_;
   bool evaluated_ = false;
+  int evaluations_ = 0;
 };
 
 }  // namespace
@@ -140,6 +143,7 @@ NcpSummary SolveNcpWithIpopt(const NcpProblem& problem, const IpoptNcpOptions& o
       if (IsValid(app->Statistics())) summary.iterations = app->Statistics()->IterationCount();
       if (nlp->finalized() && nlp->x().allFinite()) *z = nlp->x();
     }
+    summary.residual_evaluations = nlp->evaluations() + 1;  // and the error check below
   } catch (const std::exception&) {
     solved = false;
   }
