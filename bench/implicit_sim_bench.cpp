@@ -84,6 +84,7 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s) {
       Field("smoothed_solves", std::to_string(summary.smoothed_solves)),
       Field("ipopt_solves", std::to_string(summary.ipopt_solves)),
       Field("substeps", std::to_string(summary.substeps)),
+      Field("crossings", std::to_string(summary.crossings)),
       Field("broad_phase_additions", std::to_string(summary.broad_phase_additions)),
       Field("lm_fallbacks", std::to_string(data.solver.lm_fallbacks())),
       Field("max_pairs_in_ncp", std::to_string(summary.max_pairs_in_ncp)),

@@ -145,7 +145,7 @@ void SimNode::UpdateDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& sta
   status.add("received_joint_effort_commands", received_joint_commands_);
   status.add("dropped_joint_effort_commands", dropped_joint_commands_);
   for (StepFault fault : {StepFault::kNotConverged, StepFault::kNoFiniteSolution, StepFault::kInitialOverlap,
-                          StepFault::kDiverged}) {
+                          StepFault::kDiverged, StepFault::kCrossing}) {
     status.add(std::string("faults_") + StepFaultName(fault), faults_[static_cast<int>(fault)]);
   }
   status.add("real_time_factor", rtf_);

@@ -128,7 +128,7 @@ class SimNode {
   Eigen::VectorXd joint_efforts_;  // per model joint: the commanded effort (N m or N; fixed joints 0)
   long received_joint_commands_ = 0, dropped_joint_commands_ = 0;
   long diag_steps_ = 0, diag_nonconverged_ = 0, diag_failed_ = 0, dropped_commands_ = 0, received_commands_ = 0;
-  long faults_[5] = {0, 0, 0, 0, 0};  // refused or non-converged steps since startup, by StepFault
+  long faults_[6] = {0, 0, 0, 0, 0, 0};  // refused or non-converged steps since startup, by StepFault
   bool at_initial_state_ = true;      // no step taken since startup or the last reset
   double rtf_ = 0.0;
   std::string last_failure_;

@@ -16,6 +16,7 @@ void RunSummary::Add(const StepReport& report, const Data& data) {
   if (!report.converged) ++nonconverged_steps;
   cold_restarts += report.cold_restarts;
   substeps += report.substeps;
+  crossings += report.crossings;
   smoothed_solves += report.smoothed_solves;
   ipopt_solves += report.ipopt_solves;
   broad_phase_additions += report.broad_phase_additions;
@@ -43,6 +44,7 @@ std::string RunSummary::ToJson() const {
   json += "  \"smoothed_solves\": " + std::to_string(smoothed_solves) + ",\n";
   json += "  \"ipopt_solves\": " + std::to_string(ipopt_solves) + ",\n";
   json += "  \"substeps\": " + std::to_string(substeps) + ",\n";
+  json += "  \"crossings\": " + std::to_string(crossings) + ",\n";
   json += "  \"broad_phase_additions\": " + std::to_string(broad_phase_additions) + ",\n";
   json += "  \"max_pairs_in_ncp\": " + std::to_string(max_pairs_in_ncp) + ",\n";
   json += "  \"max_iterations\": " + std::to_string(max_iterations) + ",\n";

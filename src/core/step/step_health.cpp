@@ -5,6 +5,7 @@
 
 #include "implicit_sim/core/geometry/distance_oracle.h"
 #include "implicit_sim/core/base/format.h"
+#include "implicit_sim/core/step/step_problem.h"
 #include "implicit_sim/core/geometry/support.h"
 
 namespace implicit_sim {
@@ -51,6 +52,39 @@ bool FindInitialOverlap(const Model& model, const State& state, double tolerance
     }
   }
   return false;
+}
+
+namespace {
+
+// max { u . x : x in body b at pose X_WB } for a unit u_W (m): closed form where the shape has one, otherwise its
+// bounding sphere (an upper bound; +inf for an unbounded shape).
+double UpperSupport(const Body& body, const Pose& X_WB, const Vec3& u_W) {
+  Vec3 p_W;
+  if (SupportPoint(body.shape, X_WB, u_W, &p_W)) return u_W.dot(p_W);
+  return u_W.dot(X_WB * body.shape.X_BS.translation()) + body.shape.BoundingRadius();
+}
+
+}  // namespace
+
+int FindCrossing(const Model& model, const State& start, const StepProblem& problem, const Eigen::VectorXd& z,
+                 std::string* detail) {
+  for (size_t c = 0; c < problem.blocks().size(); ++c) {
+    const PairBlock& blk = problem.blocks()[c];
+    const ContactPair& pair = model.pairs[blk.pair];
+    const Vec3 n_W = z.segment<3>(blk.offset + pair_index::kN).normalized();
+    const Vec3 p_WA2 = z.segment<3>(blk.offset + pair_index::kA2);
+    if (!n_W.allFinite() || !p_WA2.allFinite()) continue;  // a non-finite solution is rejected elsewhere
+    // The plane in body 2's frame at the end of the step, then in the world at the start.
+    const Pose X_BW_end = problem.EndPose(pair.body2, z).inverse();
+    const Pose X_WB2_start = start.X_WB(model, pair.body2);
+    const Vec3 n0_W = X_WB2_start.linear() * (X_BW_end.linear() * n_W);
+    const Vec3 p0_W = X_WB2_start * (X_BW_end * p_WA2);
+    const Body& body1 = model.bodies[pair.body1];
+    if (UpperSupport(body1, start.X_WB(model, pair.body1), n0_W) >= n0_W.dot(p0_W)) continue;
+    if (detail) *detail = "pair '" + model.PairName(blk.pair) + "' crossed within the step from t = " + FormatNumber(start.t) + " s";
+    return static_cast<int>(c);
+  }
+  return -1;
 }
 
 bool FindDivergence(const Model& model, const State& state, double max_speed, double max_angular_speed,

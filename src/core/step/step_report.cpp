@@ -9,6 +9,7 @@ const char* StepFaultName(StepFault fault) {
     case StepFault::kNoFiniteSolution: return "no_finite_solution";
     case StepFault::kInitialOverlap: return "initial_overlap";
     case StepFault::kDiverged: return "diverged";
+    case StepFault::kCrossing: return "crossing";
   }
   return "unknown";
 }

@@ -90,6 +90,27 @@ int CheckLeftOutPairs(const Model& model, Data* data) {
   return missing;
 }
 
+// One solve of the step from `state`; with the broad phase, re-solved while the end-of-step check finds pairs left out
+// of the NCP overlapping (no pair may interpenetrate at the step end, in or out of the NCP).
+NcpSummary SolveWithBroadPhaseRounds(const Model& model, const StepperOptions& options, double h, const State& state,
+                                     const Eigen::VectorXd* wrench, Data* data, StepReport* report) {
+  data->forced_pairs.clear();
+  for (int round = 1;; ++round) {
+    data->problem.BeginStep(state, h, wrench);
+    if (data->broad_phase) SelectPairs(model, options, h, state, data);
+    NcpSummary result = SolveWithRetryLadder(model, options, state, data, report);
+    report->pairs_in_ncp = static_cast<int>(data->problem.blocks().size());
+    if (!data->broad_phase || !data->z.allFinite()) return result;
+    const int missing = CheckLeftOutPairs(model, data);
+    if (missing == 0) return result;
+    report->broad_phase_additions += missing;
+    if (round == Data::kMaxBroadPhaseRounds) {
+      result.converged = false;
+      return result;
+    }
+  }
+}
+
 // Advances the state by h; when the solve fails, by two halves instead, down to h / 2^kMaxSubstepDepth, where the
 // best finite iterate is accepted and reported as not converged. Returns false if the state could not be advanced.
 bool Advance(const Model& model, const StepperOptions& options, double h, int depth, const Eigen::VectorXd* wrench,
@@ -98,27 +119,23 @@ bool Advance(const Model& model, const StepperOptions& options, double h, int de
   backup = data->z;
   if (data->broad_phase) data->problem.ActivePairs(&data->pairs_backup[depth]);
   const bool had_warm_start = data->has_warm_start;
-  data->forced_pairs.clear();
-  NcpSummary result;
-  for (int round = 1;; ++round) {
-    data->problem.BeginStep(*state, h, wrench);
-    if (data->broad_phase) SelectPairs(model, options, h, *state, data);
-    result = SolveWithRetryLadder(model, options, *state, data, report);
-    if (!data->broad_phase || !data->z.allFinite()) break;
-    // No pair may interpenetrate at the step end, in or out of the NCP: re-solve with the ones found overlapping.
-    const int missing = CheckLeftOutPairs(model, data);
-    if (missing == 0) break;
-    report->broad_phase_additions += missing;
-    if (round == Data::kMaxBroadPhaseRounds) {
-      result.converged = false;
-      break;
-    }
+  NcpSummary result = SolveWithBroadPhaseRounds(model, options, h, *state, wrench, data, report);
+  // A solution in which a body passed through another is no solution of the step (tunnelling): solve again from a
+  // cold start (the start-of-step closest points, on the near side), and if it still crosses, split the step.
+  bool crossed = data->z.allFinite() && FindCrossing(model, *state, data->problem, data->z, nullptr) >= 0;
+  if (crossed && data->has_warm_start) {
+    data->has_warm_start = false;
+    result = SolveWithBroadPhaseRounds(model, options, h, *state, wrench, data, report);
+    crossed = data->z.allFinite() && FindCrossing(model, *state, data->problem, data->z, nullptr) >= 0;
   }
-  report->pairs_in_ncp = static_cast<int>(data->problem.blocks().size());
+  if (crossed) {
+    report->crossings++;
+    result.converged = false;
+  }
   if (!result.converged && depth < Data::kMaxSubstepDepth) {
     if (data->broad_phase) data->LayOut(data->pairs_backup[depth], nullptr);  // backup is laid out for these
     data->z = backup;
-    data->has_warm_start = had_warm_start;
+    data->has_warm_start = had_warm_start && !crossed;
     report->substeps += 1;
     return Advance(model, options, h / 2, depth + 1, wrench, state, data, report) &&
            Advance(model, options, h / 2, depth + 1, wrench, state, data, report);
@@ -126,6 +143,13 @@ bool Advance(const Model& model, const StepperOptions& options, double h, int de
   if (!std::isfinite(result.residual) || !data->z.allFinite()) {
     data->has_warm_start = false;  // the state is left as it was; the next step starts cold
     report->converged = false;
+    return false;
+  }
+  if (crossed) {  // even the shortest sub-step crossed: refuse the step rather than let the body through
+    data->has_warm_start = false;
+    report->converged = false;
+    report->fault = StepFault::kCrossing;
+    FindCrossing(model, *state, data->problem, data->z, &report->fault_detail);
     return false;
   }
   StepProblem& problem = data->problem;

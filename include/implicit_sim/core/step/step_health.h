@@ -15,6 +15,15 @@ namespace implicit_sim {
 // bound. Uses the broad phase and its workspace in *data.
 bool FindInitialOverlap(const Model& model, const State& state, double tolerance, Data* data, std::string* detail);
 
+// Tunnelling: an end-of-step solution z of the step from `start` in which a body has passed through another. The
+// end-of-step conditions alone allow it (a ball against the FAR face of a thin wall is a legal NCP solution), so each
+// pair of the problem is checked against the start of the step: its end-of-step separating plane (through a2, normal
+// n), carried back with body 2 to body 2's start pose, must not have all of body 1's start pose strictly behind it
+// (closed-form support points, or the bounding sphere). Returns the block of the first pair that crossed, -1 if none;
+// *detail (if not null) then names the pair. No heap allocation unless a pair crossed and detail is given.
+int FindCrossing(const Model& model, const State& start, const StepProblem& problem, const Eigen::VectorXd& z,
+                 std::string* detail);
+
 // True if a moving body is faster than max_speed (m/s) or spins faster than max_angular_speed (rad/s).
 bool FindDivergence(const Model& model, const State& state, double max_speed, double max_angular_speed,
                     std::string* detail);

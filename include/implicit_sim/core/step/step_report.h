@@ -5,16 +5,18 @@
 
 namespace implicit_sim {
 
-// Why a step was not accepted as a good one. With kInitialOverlap, kDiverged and kNoFiniteSolution the state is left
-// exactly as it was before the step (StepReport::advanced is false).
+// Why a step was not accepted as a good one. With kInitialOverlap, kDiverged, kNoFiniteSolution and kCrossing the state
+// is left exactly as it was before the step (StepReport::advanced is false).
 enum class StepFault {
   kNone,
   kNotConverged,      // advanced with the best iterate found, reported as not converged (the retry ladder ran out)
   kNoFiniteSolution,  // every rung produced non-finite values
   kInitialOverlap,    // a cold step started with two bodies overlapping by more than overlap_tolerance
   kDiverged,          // the end velocities exceed max_speed or max_angular_speed
+  kCrossing,          // a body passed through another even in the shortest sub-step (step_health.h, FindCrossing)
 };
-const char* StepFaultName(StepFault fault);  // "none", "not_converged", "no_finite_solution", "initial_overlap", "diverged"
+const char* StepFaultName(StepFault fault);  // "none", "not_converged", "no_finite_solution", "initial_overlap", "diverged",
+                                             // "crossing"
 
 struct StepReport {
   bool converged = false;       // the NCP (every sub-step's, if the step was split) was solved to tolerance
@@ -23,6 +25,7 @@ struct StepReport {
   int smoothed_solves = 0;      // solves that went on to a smoothing continuation after the cold start failed
   int ipopt_solves = 0;         // Ipopt solves (the primary solver, or the ladder rung after the continuation)
   int substeps = 0;             // times a (sub-)step was split into two halves after its solve failed
+  int crossings = 0;            // solves rejected because a body passed through another (see FindCrossing) and split
   int broad_phase_additions = 0;  // pairs left out by the broad phase, found overlapping at the step end and added
   int pairs_in_ncp = 0;         // pairs in the NCP of the (last) solve
   int iterations = 0;           // Newton iterations, all attempts
