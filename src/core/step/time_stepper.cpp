@@ -90,6 +90,17 @@ int CheckLeftOutPairs(const Model& model, Data* data) {
   return missing;
 }
 
+// Whether the velocities of a solution z exceed options.max_speed or max_angular_speed (see FindDivergence).
+bool ExceedsSpeedLimits(const Model& model, const StepperOptions& options, const Eigen::VectorXd& z) {
+  for (int k = 0; k < model.num_moving(); ++k) {
+    const int iv = Model::v_offset(k);
+    if (z.segment<3>(iv).norm() > options.max_speed || z.segment<3>(iv + 3).norm() > options.max_angular_speed) {
+      return true;
+    }
+  }
+  return false;
+}
+
 // One solve of the step from `state`; with the broad phase, re-solved while the end-of-step check finds pairs left out
 // of the NCP overlapping (no pair may interpenetrate at the step end, in or out of the NCP).
 NcpSummary SolveWithBroadPhaseRounds(const Model& model, const StepperOptions& options, double h, const State& state,
@@ -145,7 +156,9 @@ bool Advance(const Model& model, const StepperOptions& options, double h, int de
     report->converged = false;
     return false;
   }
-  if (crossed) {  // even the shortest sub-step crossed: refuse the step rather than let the body through
+  // Even the shortest sub-step crossed: refuse the step rather than let the body through (unless its velocities are
+  // beyond the health limits: Step then refuses it as diverged, the more telling fault).
+  if (crossed && !ExceedsSpeedLimits(model, options, data->z)) {
     data->has_warm_start = false;
     report->converged = false;
     report->fault = StepFault::kCrossing;
