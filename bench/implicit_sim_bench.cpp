@@ -86,7 +86,7 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s) {
       Field("substeps", std::to_string(summary.substeps)),
       Field("crossings", std::to_string(summary.crossings)),
       Field("broad_phase_additions", std::to_string(summary.broad_phase_additions)),
-      Field("lm_fallbacks", std::to_string(data.solver.lm_fallbacks())),
+      Field("lm_fallbacks", std::to_string(data.lm_fallbacks())),
       Field("max_pairs_in_ncp", std::to_string(summary.max_pairs_in_ncp)),
       Field("mean_iterations", FormatNumber(summary.steps > 0 ? iterations / summary.steps : 0.0)),
       Field("kinetic_energy_initial", FormatNumber(summary.kinetic_energy_initial)),

@@ -4,6 +4,11 @@
 
 namespace implicit_sim {
 
+std::mutex& IpoptMutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
 Ipopt::SmartPtr<Ipopt::IpoptApplication> MakeQuietIpopt(const IpoptSettings& settings) {
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app = IpoptApplicationFactory();
   app->Options()->SetIntegerValue("print_level", 0);

@@ -2,6 +2,8 @@
 // application, and a TNLP base that keeps the solution Ipopt finalizes.
 #pragma once
 
+#include <mutex>
+
 #include <Eigen/Core>
 #include <IpIpoptApplication.hpp>
 #include <IpTNLP.hpp>
@@ -19,6 +21,10 @@ struct IpoptSettings {
 // An initialized application with no output, no banner, adaptive mu, and no option file read from the working
 // directory; null if Ipopt fails to initialize.
 Ipopt::SmartPtr<Ipopt::IpoptApplication> MakeQuietIpopt(const IpoptSettings& settings);
+
+// Held by every Ipopt solve: Debian's Ipopt factors with the sequential MUMPS, which is not thread-safe, and islands
+// are solved on several threads (step/islands.h).
+std::mutex& IpoptMutex();
 
 // Whether an Ipopt return status is a solution (to tol, or to the acceptable level).
 inline bool IpoptSolved(Ipopt::ApplicationReturnStatus status) {

@@ -204,6 +204,7 @@ bool RunIpopt(const Ipopt::SmartPtr<ShapeNlp>& nlp) {
   settings.acceptable_tol = 1e-9;
   settings.max_iter = 500;
   settings.honor_bounds = true;
+  const std::lock_guard<std::mutex> lock(IpoptMutex());
   const Ipopt::SmartPtr<Ipopt::IpoptApplication> app = MakeQuietIpopt(settings);
   if (!IsValid(app)) return false;
   const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(GetRawPtr(nlp)));

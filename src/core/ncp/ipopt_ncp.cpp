@@ -131,6 +131,7 @@ NcpSummary SolveNcpWithIpopt(const NcpProblem& problem, const IpoptNcpOptions& o
   NcpSummary summary;
   bool solved = false;
   try {
+    const std::lock_guard<std::mutex> lock(IpoptMutex());
     Ipopt::SmartPtr<PenaltyNlp> nlp = new PenaltyNlp(problem, *z);
     IpoptSettings settings;
     settings.tol = options.ipopt_tol;

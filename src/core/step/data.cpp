@@ -5,33 +5,38 @@
 
 namespace implicit_sim {
 
+IslandSolve::IslandSolve(const Model& model)
+    : problem(model, /*all_pairs=*/false), dense_solver(0, false), sparse_solver(0, true),
+      z_backup(Data::kMaxSubstepDepth + 1) {
+  problem.set_regular_separated_friction(true);  // keeps the Newton matrix regular at separated pairs
+}
+
 Data::Data(const Model& model, PairSelection selection)
     : model_(&model),
       broad_phase(selection == PairSelection::kBroadPhase ||
                   (selection == PairSelection::kAuto && static_cast<int>(model.pairs.size()) > kAllPairsLimit)),
       problem(model, !broad_phase),
-      sparse(broad_phase || problem.size() > kDenseSizeLimit),
-      solver(problem.size(), sparse),
-      broad(MakeBroadPhase(model)),
       z(Eigen::VectorXd::Zero(problem.size())),
-      z_start(Eigen::VectorXd::Zero(problem.size())),
-      z_best(Eigen::VectorXd::Zero(problem.size())),
-      ncp_error_rows(Eigen::VectorXd::Zero(problem.size())),
-      z_backup(kMaxSubstepDepth + 1, Eigen::VectorXd::Zero(problem.size())),
-      pairs_backup(kMaxSubstepDepth + 1),
+      island_root(model.num_moving()),
+      island_of_slot(model.num_moving()),
+      broad(MakeBroadPhase(model)),
       X_WB(model.bodies.size(), Pose::Identity()),
       inflation(model.bodies.size(), 0.0),
       contacts(problem.blocks().size()) {
   for (size_t c = 0; c < contacts.size(); ++c) contacts[c].pair = problem.blocks()[c].pair;
-  axes_warm_failed.reserve(model.pairs.size());  // a cold restart keeps the failed warm axes without allocating
-  problem.set_regular_separated_friction(true);  // keeps the Newton matrix regular at separated pairs
+  problem.set_regular_separated_friction(true);
 }
+
+Data::~Data() = default;
 
 void Data::LayOut(const std::vector<int>& pairs_in_ncp, const Eigen::VectorXd* z_old) {
   problem.SetActivePairs(pairs_in_ncp, z_old, &z_remap, &new_blocks);
-  z_start.resize(problem.size());
-  z_best.resize(problem.size());
-  ncp_error_rows.resize(problem.size());
+}
+
+int Data::lm_fallbacks() const {
+  int total = 0;
+  for (const auto& island : islands) total += island->dense_solver.lm_fallbacks() + island->sparse_solver.lm_fallbacks();
+  return total;
 }
 
 void SaveWarmStart(const Data& data, WarmStart* out) {
@@ -70,7 +75,6 @@ void RestoreWarmStart(const Model& model, const WarmStart& saved, Data* data) {
 void ClearWarmStart(Data* data) {
   if (data->broad_phase) data->LayOut({}, nullptr);
   data->z.setZero(data->problem.size());
-  data->z_start.setZero(data->problem.size());
   data->has_warm_start = false;
   data->forced_pairs.clear();
 }

@@ -63,6 +63,10 @@ constexpr std::array<OptionRow, kNumOptionRows> kTable{{
     {"overlap_tolerance", "", "", OptionKind::kReal, 1e-6, 0.0, 1.0, false, false, "m", nullptr,
      "a cold step refuses to start from bodies overlapping by more than this",
      [](const Options& o) { return o.overlap_tolerance; }, [](Options* o, double x) { o->overlap_tolerance = x; }},
+    {"threads", "threads", "--threads", OptionKind::kInteger, 0.0, 0.0, 256.0, false, false, "", nullptr,
+     "threads that solve the step's islands (0: the hardware's cores); results do not depend on it",
+     [](const Options& o) { return static_cast<double>(o.threads); },
+     [](Options* o, double x) { o->threads = static_cast<int>(x); }},
 }};
 
 template <typename NameOf>

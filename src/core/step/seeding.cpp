@@ -47,8 +47,18 @@ void SeedPair(const Model& model, const State& state, int c, const StepProblem& 
   (*z)[blk.ln()] = cp.distance < 1e-6 ? 0.5 * problem.force_scale() : 0.0;
 }
 
+namespace {
+
+// The state's velocities of the problem's moving bodies.
+void SeedVelocities(const State& state, const StepProblem& problem, Eigen::VectorXd* z) {
+  const std::vector<int>& slots = problem.slots();
+  for (size_t i = 0; i < slots.size(); ++i) z->segment<6>(6 * i) = state.v.segment<6>(Model::v_offset(slots[i]));
+}
+
+}  // namespace
+
 void SeedColdStart(const Model& model, const State& state, StepProblem* problem, Eigen::VectorXd* z) {
-  z->head(model.nv()) = state.v;
+  SeedVelocities(state, *problem, z);
   problem->SeedJoints(z);
   for (int c = 0; c < static_cast<int>(problem->blocks().size()); ++c) SeedPair(model, state, c, *problem, z);
   problem->ResetTangentAxes(*z);
@@ -56,7 +66,7 @@ void SeedColdStart(const Model& model, const State& state, StepProblem* problem,
 }
 
 void SeedWarmStart(const Model& model, const State& state, StepProblem* problem, Eigen::VectorXd* z) {
-  z->head(model.nv()) = state.v;  // the previous solution's velocities are the state's
+  SeedVelocities(state, *problem, z);  // the previous solution's velocities are the state's
   problem->UpdateTangentAxes(z);
   problem->PredictClosestPoints(z);
 }
@@ -89,9 +99,9 @@ void StepProblem::UpdateTangentAxes(Eigen::VectorXd* z) {
 
 void StepProblem::PredictClosestPoints(Eigen::VectorXd* z) const {
   for (size_t c = 0; c < blocks_.size(); ++c) {
-    const ContactPair& pair = model_.pairs[blocks_[c].pair];
     const int off = blocks_[c].offset;
-    for (const auto& [body, column] : {std::make_pair(pair.body1, off + pair_index::kA1), std::make_pair(pair.body2, off + pair_index::kA2)}) {
+    for (const auto& [body, column] : {std::make_pair(blocks_[c].body1, off + pair_index::kA1),
+                                       std::make_pair(blocks_[c].body2, off + pair_index::kA2)}) {
       z->segment<3>(column) += h_ * start_[body].v0;
     }
     const Vec3 n = z->segment<3>(off + pair_index::kN);
@@ -108,8 +118,8 @@ void StepProblem::SeedFriction(int c, Eigen::VectorXd* z) const {
   const FrictionParams& fr = pair.friction;
   const PairBlock& blk = blocks_[c];
   const int off = blk.offset;
-  const BodyStep& s1 = start_[pair.body1];
-  const BodyStep& s2 = start_[pair.body2];
+  const BodyStep& s1 = start_[blk.body1];
+  const BodyStep& s2 = start_[blk.body2];
   const Vec3 n = z->segment<3>(off + pair_index::kN).normalized();
   const Vec3 v_rel = RelativeVelocity(s1.v0, s1.w0, z->segment<3>(off + pair_index::kA1) - s1.p0, s2.v0, s2.w0,
                                       z->segment<3>(off + pair_index::kA2) - s2.p0);

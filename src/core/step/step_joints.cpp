@@ -32,10 +32,11 @@ Pose MakePose(const Vec3& p, const Mat3& R) {
 }  // namespace
 
 void StepProblem::BeginJoints() {
-  for (size_t j = 0; j < model_.joints.size(); ++j) {
+  for (int j : joints_) {
     const Joint& joint = model_.joints[j];
-    const Pose X_WP = joint.parent < 0 ? Pose::Identity() : MakePose(start_[joint.parent].p0, start_[joint.parent].R0);
-    const Pose X_WC = MakePose(start_[joint.child].p0, start_[joint.child].R0);
+    const JointBodies& jb = joint_bodies_[j];
+    const Pose X_WP = jb.parent < 0 ? Pose::Identity() : MakePose(start_[jb.parent].p0, start_[jb.parent].R0);
+    const Pose X_WC = MakePose(start_[jb.child].p0, start_[jb.child].R0);
     for (int i = 0; i < joint.num_equalities(); ++i) JointEquality(joint, i, X_WP, X_WC, &joint_equality_start_[j][i]);
     JointPosition(joint, X_WP, X_WC, &joint_position_start_[j]);
   }
@@ -49,16 +50,17 @@ double StepProblem::JointLimitEffort(const Eigen::VectorXd& z, int j) const {
 }
 
 void StepProblem::SeedJoints(Eigen::VectorXd* z) const {
-  for (size_t j = 0; j < model_.joints.size(); ++j) {
+  for (int j : joints_) {
     const Joint& joint = model_.joints[j];
     const int o = joint_offset_[j];
     z->segment(o, joint.size()).setZero();
     if (!(joint.friction > 0.0)) continue;
-    const BodyStep& c = start_[joint.child];
+    const JointBodies& jb = joint_bodies_[j];
+    const BodyStep& c = start_[jb.child];
     const Vec3 zero = Vec3::Zero();
-    const bool world = joint.parent < 0;
-    const double rate = joint_position_start_[j].Rate(world ? zero : start_[joint.parent].v0,
-                                                      world ? zero : start_[joint.parent].w0, c.v0, c.w0);
+    const bool world = jb.parent < 0;
+    const double rate = joint_position_start_[j].Rate(world ? zero : start_[jb.parent].v0,
+                                                      world ? zero : start_[jb.parent].w0, c.v0, c.w0);
     const int s_col = o + joint.num_equalities() + (joint.limited ? 2 : 0);
     (*z)[s_col] = rate > 1e-9 ? -1.0 : (rate < -1e-9 ? 1.0 : 0.0);
     (*z)[s_col + 1] = std::abs(rate) > 1e-9 ? std::abs(rate) : 1e-3;  // sigma > 0: see SeedFriction
@@ -110,11 +112,11 @@ void StepProblem::AddJointForce(const JointGradient& g, double force, int col, d
 }
 
 void StepProblem::AddJointRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const {
-  for (size_t j = 0; j < model_.joints.size(); ++j) {
+  for (int j : joints_) {
     const Joint& joint = model_.joints[j];
     const int o = joint_offset_[j], m = joint.num_equalities();
-    const BodyEnd& eP = ParentEnd(joint);
-    const BodyEnd& eC = end_[joint.child];
+    const BodyEnd& eP = ParentEnd(j);
+    const BodyEnd& eC = ChildEnd(j);
     const Pose X_WP = MakePose(eP.p, eP.R), X_WC = MakePose(eC.p, eC.R);  // end of step
     JointGradient g;
     for (int i = 0; i < m; ++i) {  // the equalities at the end of the step

@@ -11,21 +11,18 @@
 namespace implicit_sim {
 namespace pi = pair_index;
 StepProblem::StepProblem(const Model& model, bool all_pairs)
-    : model_(model), start_(model.bodies.size()), end_(model.bodies.size()), force_scale_(model.ForceScale()) {
-  external_wrench_W_ = Eigen::VectorXd::Zero(model.nv());
-  locked_row_.assign(model.nv(), 0);
-  for (size_t b = 0; b < model.bodies.size(); ++b) {
-    const int k = model.velocity_slot[b];
-    end_[b].col = k < 0 ? -1 : Model::v_offset(k);
-    for (int i = 0; k >= 0 && i < 6; ++i) locked_row_[Model::v_offset(k) + i] = model.bodies[b].locked[i];
-  }
-  pair_base_ = model.nv();
-  for (const Joint& joint : model.joints) {
-    joint_offset_.push_back(pair_base_);
-    pair_base_ += joint.size();
-  }
+    : model_(model), model_force_scale_(model.ForceScale()), force_scale_(model_force_scale_) {
   joint_equality_start_.resize(model.joints.size());
   joint_position_start_.resize(model.joints.size());
+  joint_bodies_.resize(model.joints.size());
+  joint_offset_.assign(model.joints.size(), -1);
+  for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
+    if (model.velocity_slot[b] < 0) fixed_bodies_.push_back(b);
+  }
+  std::vector<int> slots(model.num_moving()), joints(model.joints.size());
+  for (int k = 0; k < model.num_moving(); ++k) slots[k] = k;
+  for (size_t j = 0; j < joints.size(); ++j) joints[j] = static_cast<int>(j);
+  SetBodies(slots, joints);
   std::vector<int> pairs;
   for (int c = 0; all_pairs && c < static_cast<int>(model.pairs.size()); ++c) pairs.push_back(c);
   std::vector<int> new_blocks;
@@ -33,10 +30,61 @@ StepProblem::StepProblem(const Model& model, bool all_pairs)
   SetActivePairs(pairs, nullptr, &z, &new_blocks);
 }
 
+void StepProblem::SetBodies(const std::vector<int>& slots, const std::vector<int>& joints) {
+  const Model& model = model_;
+  slots_ = slots;
+  joints_ = joints;
+  // The moving bodies of `slots` and every fixed body, merged in ascending order (moving_bodies is ascending).
+  bodies_.clear();
+  size_t f = 0;
+  for (int k : slots_) {
+    const int b = model.moving_bodies[k];
+    while (f < fixed_bodies_.size() && fixed_bodies_[f] < b) bodies_.push_back(fixed_bodies_[f++]);
+    bodies_.push_back(b);
+  }
+  bodies_.insert(bodies_.end(), fixed_bodies_.begin() + f, fixed_bodies_.end());
+  start_.assign(bodies_.size(), BodyStep());
+  end_.assign(bodies_.size(), BodyEnd());
+  slot_body_.assign(slots_.size(), -1);
+  locked_row_.assign(6 * slots_.size(), 0);
+  external_wrench_W_.setZero(6 * slots_.size());
+  for (size_t s = 0; s < slots_.size(); ++s) {
+    const int b = model.moving_bodies[slots_[s]];
+    const int local = LocalBody(b);
+    slot_body_[s] = local;
+    end_[local].col = static_cast<int>(6 * s);
+    for (int r = 0; r < 6; ++r) locked_row_[6 * s + r] = model.bodies[b].locked[r];
+  }
+  pair_base_ = static_cast<int>(6 * slots_.size());
+  std::fill(joint_offset_.begin(), joint_offset_.end(), -1);
+  for (int j : joints_) {
+    const Joint& joint = model.joints[j];
+    joint_offset_[j] = pair_base_;
+    pair_base_ += joint.size();
+    joint_bodies_[j].parent = joint.parent < 0 ? -1 : LocalBody(joint.parent);
+    joint_bodies_[j].child = LocalBody(joint.child);
+  }
+  std::vector<int> new_blocks;
+  Eigen::VectorXd z;
+  SetActivePairs({}, nullptr, &z, &new_blocks);
+}
+
+int StepProblem::LocalBody(int body) const {
+  const auto it = std::lower_bound(bodies_.begin(), bodies_.end(), body);
+  return it != bodies_.end() && *it == body ? static_cast<int>(it - bodies_.begin()) : -1;
+}
+
+int StepProblem::body_column(int body) const {
+  const int local = LocalBody(body);
+  return local < 0 ? -1 : end_[local].col;
+}
+
 void StepProblem::SetActivePairs(const std::vector<int>& pairs, const Eigen::VectorXd* z_old, Eigen::VectorXd* z_new,
                                  std::vector<int>* new_blocks) {
-  const std::vector<PairBlock> old_blocks = blocks_;
-  const std::vector<Vec3> old_axes = tangent_axis_;
+  old_blocks_ = blocks_;
+  old_axes_ = tangent_axis_;
+  const std::vector<PairBlock>& old_blocks = old_blocks_;
+  const std::vector<Vec3>& old_axes = old_axes_;
   blocks_.clear();
   size_ = pair_base_;
   for (int pair : pairs) {
@@ -45,12 +93,14 @@ void StepProblem::SetActivePairs(const std::vector<int>& pairs, const Eigen::Vec
     block.offset = size_;
     block.k1 = static_cast<int>(model_.bodies[model_.pairs[pair].body1].shape.inequalities.size());
     block.k2 = static_cast<int>(model_.bodies[model_.pairs[pair].body2].shape.inequalities.size());
+    block.body1 = LocalBody(model_.pairs[pair].body1);
+    block.body2 = LocalBody(model_.pairs[pair].body2);
     blocks_.push_back(block);
     size_ += block.size();
   }
   tangent_axis_.assign(blocks_.size(), Vec3::UnitX());
   complementarity_kind_.assign(size_, 0);
-  for (size_t j = 0; j < model_.joints.size(); ++j) {
+  for (int j : joints_) {
     const Joint& joint = model_.joints[j];
     const int extra = joint_offset_[j] + joint.num_equalities();
     if (joint.limited) complementarity_kind_[extra] = complementarity_kind_[extra + 1] = 2;  // l / Fs _|_ distance
@@ -90,19 +140,20 @@ bool StepProblem::IsComplementarityRow(int row, double* scale) const {
 void StepProblem::BeginStep(const State& start, double h, const Eigen::VectorXd* external_wrench_W) {
   const Model& model = model_;
   h_ = h;
-  force_scale_ = model.ForceScale();
-  if (external_wrench_W) {
-    external_wrench_W_ = *external_wrench_W;
-    for (int k = 0; k < model.num_moving(); ++k) {
-      force_scale_ = std::max(force_scale_, external_wrench_W_.segment<3>(Model::v_offset(k)).norm());
+  force_scale_ = model_force_scale_;
+  for (size_t s = 0; s < slots_.size(); ++s) {
+    if (external_wrench_W) {
+      external_wrench_W_.segment<6>(6 * s) = external_wrench_W->segment<6>(Model::v_offset(slots_[s]));
+      force_scale_ = std::max(force_scale_, external_wrench_W_.segment<3>(6 * s).norm());
+    } else {
+      external_wrench_W_.segment<6>(6 * s).setZero();
     }
-  } else {
-    external_wrench_W_.setZero();
   }
-  for (size_t b = 0; b < model.bodies.size(); ++b) {
+  for (size_t i = 0; i < bodies_.size(); ++i) {
+    const int b = bodies_[i];
     const Body& body = model.bodies[b];
-    const Pose X_WB = start.X_WB(model, static_cast<int>(b));
-    BodyStep& s = start_[b];
+    const Pose X_WB = start.X_WB(model, b);
+    BodyStep& s = start_[i];
     s.p0 = X_WB.translation();
     s.R0 = X_WB.linear();
     const int k = model.velocity_slot[b];
@@ -130,9 +181,10 @@ void StepProblem::UpdateBodies(const Eigen::VectorXd& z) const {
 }
 
 Pose StepProblem::EndPose(int body, const Eigen::VectorXd& z) const {
-  const BodyStep& s = start_[body];
+  const int local = LocalBody(body);
+  const BodyStep& s = start_[local];
   Pose X = Pose::Identity();
-  const int col = end_[body].col;
+  const int col = end_[local].col;
   X.translation() = s.p0;
   X.linear() = s.R0;
   if (col < 0) return X;
@@ -144,9 +196,9 @@ Pose StepProblem::EndPose(int body, const Eigen::VectorXd& z) const {
   return X;
 }
 
-StepProblem::Eval StepProblem::EvaluateInequality(int body, int k, const Vec3& p_W) const {
-  const ConvexShape& shape = model_.bodies[body].shape;
-  const BodyEnd& e = end_[body];
+StepProblem::Eval StepProblem::EvaluateInequality(int local, int k, const Vec3& p_W) const {
+  const ConvexShape& shape = model_.bodies[bodies_[local]].shape;
+  const BodyEnd& e = end_[local];
   const Mat3 R_WS = e.R * shape.X_BS.linear();
   const Vec3 p_WS = e.p + e.R * shape.X_BS.translation();
   Eval out;
@@ -217,18 +269,17 @@ void StepProblem::EvaluateSparse(const Eigen::VectorXd& z, const NcpEvalMode& mo
 // Newton-Euler in impulse form divided by h (paper eq. 1 discretized): force units, scaled by 1/Fs.
 void StepProblem::AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const {
   const double Fs = force_scale_;
-  for (int k = 0; k < model_.num_moving(); ++k) {
-    const int b = model_.moving_bodies[k];
-    const Body& body = model_.bodies[b];
-    const BodyStep& s = start_[b];
-    const int row = Model::v_offset(k);
+  for (size_t i = 0; i < slots_.size(); ++i) {
+    const Body& body = model_.bodies[bodies_[slot_body_[i]]];
+    const BodyStep& s = start_[slot_body_[i]];
+    const int row = static_cast<int>(6 * i);
     const Vec3 f_ext = body.mass * model_.gravity_W + body.f_applied_W + external_wrench_W_.segment<3>(row);
     const Vec3 tau_ext = body.tau_applied_W + external_wrench_W_.segment<3>(row + 3);
     Phi->segment<3>(row) = (body.mass * (z.segment<3>(row) - s.v0) / h_ - f_ext) / Fs;
     // Angular momentum form: (I_W(R1) w1 - I_W(R0) w0) / h = torque, with the inertia at the end-of-step
     // orientation R1 = Exp(h w1) R0. It holds the gyroscopic effect implicitly and conserves angular momentum exactly
     // without torque (doc/method.md, pitfall 7).
-    const BodyEnd& e = end_[b];
+    const BodyEnd& e = end_[slot_body_[i]];
     const Mat3 I_W1 = e.R * body.I_B * e.R.transpose();
     const Vec3 w1 = z.segment<3>(row + 3);
     Phi->segment<3>(row + 3) = ((I_W1 * w1 - s.I_W0 * s.w0) / h_ - tau_ext) / Fs;
@@ -239,9 +290,9 @@ void StepProblem::AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) co
 }
 
 // Adds -sign * (F, r x F + lr n) / Fs to the body rows of `body` (sign +1 for body 1, -1 for body 2).
-void StepProblem::AddContactWrench(int c, int body, double sign, const Vec3& r, const ContactWrench& w,
+void StepProblem::AddContactWrench(int c, int local, double sign, const Vec3& r, const ContactWrench& w,
                                    Eigen::VectorXd* Phi) const {
-  const BodyEnd& e = end_[body];
+  const BodyEnd& e = end_[local];
   if (e.col < 0) return;
   const PairBlock& blk = blocks_[c];
   const int off = blk.offset, row = e.col;
@@ -272,8 +323,8 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
   const Vec3 a1 = z.segment<3>(off + pi::kA1), a2 = z.segment<3>(off + pi::kA2), n = z.segment<3>(off + pi::kN);
   const double d = z[off + pi::kD], st = z[off + pi::kSt], so = z[off + pi::kSo], sr = z[off + pi::kSr];
   const double ln = z[blk.ln()], sigma = z[blk.sigma()];
-  const BodyEnd& e1 = end_[pair.body1];
-  const BodyEnd& e2 = end_[pair.body2];
+  const BodyEnd& e1 = end_[blk.body1];
+  const BodyEnd& e2 = end_[blk.body2];
   const Vec3 r1 = a1 - e1.p, r2 = a2 - e2.p;
   const Mat3 I3 = Mat3::Identity();
   const bool want_J = WantJacobian();
@@ -299,8 +350,8 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
     Vec3 a, r;
     const BodyEnd* e;
   };
-  const Side sides[2] = {{pair.body2, off + 3, off + pi::kA2, blk.beta(), blk.k2, 1.0, a2, r2, &e2},
-                         {pair.body1, off + 6, off + pi::kA1, off + pi::kAlpha, blk.k1, -1.0, a1, r1, &e1}};
+  const Side sides[2] = {{blk.body2, off + 3, off + pi::kA2, blk.beta(), blk.k2, 1.0, a2, r2, &e2},
+                         {blk.body1, off + 6, off + pi::kA1, off + pi::kAlpha, blk.k1, -1.0, a1, r1, &e1}};
   for (const Side& side : sides) {
     Phi->segment<3>(side.rows) = side.n_sign * n;
     add(side.rows, off + pi::kN, side.n_sign * I3);
@@ -409,8 +460,8 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
   w.lr = mu * fr.e_r * ln * sr;
   w.dlr_dln = mu * fr.e_r * sr;
   w.dlr_dsr = mu * fr.e_r * ln;
-  AddContactWrench(c, pair.body1, +1.0, r1, w, Phi);
-  AddContactWrench(c, pair.body2, -1.0, r2, w, Phi);
+  AddContactWrench(c, blk.body1, +1.0, r1, w, Phi);
+  AddContactWrench(c, blk.body2, -1.0, r2, w, Phi);
 }
 
 void StepProblem::Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>* contacts) const {
@@ -434,8 +485,8 @@ void StepProblem::Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>*
     const double mu_ln = fr.mu * out.normal_force;
     out.friction_force_W = mu_ln * (fr.e_t * z[off + pi::kSt] * t + fr.e_o * z[off + pi::kSo] * o);
     out.torsional_moment = mu_ln * fr.e_r * z[off + pi::kSr];
-    const BodyEnd& e1 = end_[pair.body1];
-    const BodyEnd& e2 = end_[pair.body2];
+    const BodyEnd& e1 = end_[blk.body1];
+    const BodyEnd& e2 = end_[blk.body2];
     const Vec3 v_rel = RelativeVelocity(e1.v, e1.w, out.p_WA1 - e1.p, e2.v, e2.w, out.p_WA2 - e2.p);
     out.slip_speed = (v_rel - v_rel.dot(out.n_W) * out.n_W).norm();
   }

@@ -2,10 +2,11 @@
 //   1. check the inputs, and on a cold step that no two bodies overlap (step_health.h);
 //   2. start-of-step kinematics: poses, velocities and world inertia at t (StepProblem::BeginStep);
 //   3. candidate pairs: all of them, or the broad phase over bounding spheres grown by the motion within the step;
-//   4. the step NCP (paper eq. 10-11 with the kinematic map eq. 2 and the closest-point conditions eq. 19-22) solved
-//      through the retry ladder (retry_ladder.h); with the broad phase, pairs found overlapping at the step end are
-//      added and the step solved again;
-//   5. a failed solve splits the step into halves, down to h / 2^Data::kMaxSubstepDepth;
+//   4. islands: the moving bodies joined by those pairs or by joints (islands.h), each one step NCP of its own (paper
+//      eq. 10-11 with the kinematic map eq. 2 and the closest-point conditions eq. 19-22), solved on a thread pool
+//      through its retry ladder (retry_ladder.h); a failed island solve splits the island's step into halves, down to
+//      h / 2^Data::kMaxSubstepDepth;
+//   5. with the broad phase, pairs found overlapping at the step end are added and the step solved again;
 //   6. the end-of-step state (paper eq. 2), contact results, health check of the velocities (step_health.h).
 #include "implicit_sim/core/step/time_stepper.h"
 
@@ -14,9 +15,11 @@
 #include <cmath>
 #include <iterator>
 #include <stdexcept>
+#include <utility>
 
 #include "implicit_sim/core/model/joints.h"
 #include "implicit_sim/core/ncp/ncp_error.h"
+#include "implicit_sim/core/step/islands.h"
 #include "implicit_sim/core/step/retry_ladder.h"
 #include "implicit_sim/core/step/seeding.h"
 #include "implicit_sim/core/step/step_health.h"
@@ -24,20 +27,20 @@
 namespace implicit_sim {
 namespace {
 
-// The state at the end of the step from the solution z: the poses of paper eq. 2, the velocities of z. Quaternion
-// signs follow the previous ones, so q is continuous in time.
-void WriteState(const Model& model, const StepProblem& problem, const Eigen::VectorXd& z, double h, State* state) {
-  for (int k = 0; k < model.num_moving(); ++k) {
-    const Pose X = problem.EndPose(model.moving_bodies[k], z);
+// The state of the island's bodies at the end of the step from the solution z: the poses of paper eq. 2, the
+// velocities of z. Quaternion signs follow the previous ones, so q is continuous in time. (state->t is Step's.)
+void WriteState(const Model& model, const StepProblem& problem, const Eigen::VectorXd& z, State* state) {
+  const std::vector<int>& slots = problem.slots();
+  for (size_t i = 0; i < slots.size(); ++i) {
+    const Pose X = problem.EndPose(model.moving_bodies[slots[i]], z);
     Eigen::Quaterniond quat(X.linear());
-    const int iq = Model::q_offset(k), iv = Model::v_offset(k);
+    const int iq = Model::q_offset(slots[i]), iv = Model::v_offset(slots[i]);
     const Eigen::Vector4d old = state->q.segment<4>(iq + 3);
     if (quat.w() * old[0] + quat.x() * old[1] + quat.y() * old[2] + quat.z() * old[3] < 0.0) quat.coeffs() *= -1.0;
     state->q.segment<3>(iq) = X.translation();
     state->q.segment<4>(iq + 3) << quat.w(), quat.x(), quat.y(), quat.z();
-    state->v.segment<6>(iv) = z.segment<6>(iv);
+    state->v.segment<6>(iv) = z.segment<6>(6 * i);
   }
-  state->t += h;
 }
 
 // Lays the problem out for `pairs`, carrying z over; the blocks of new pairs are seeded from `state` like a cold start.
@@ -50,6 +53,7 @@ void SetPairs(const Model& model, const State& state, const std::vector<int>& pa
     problem.ResetTangentAxis(c, data->z);
     problem.SeedFriction(c, &data->z);
   }
+  data->contacts.resize(problem.blocks().size());
 }
 
 // The pairs of the NCP for a step of length h from `state`: the broad phase over bounding spheres grown by the motion
@@ -71,11 +75,11 @@ void SelectPairs(const Model& model, const StepperOptions& options, double h, co
   if (data->merged != data->pairs) SetPairs(model, state, data->merged, data);
 }
 
-// The end-of-step check of the pairs left out of the NCP: bounding spheres (no growth) at the end poses of z. Pairs
-// that overlap are added to Data::forced_pairs; returns how many.
-int CheckLeftOutPairs(const Model& model, Data* data) {
+// The end-of-step check of the pairs left out of the NCP: bounding spheres (no growth) at the end poses in `end`.
+// Pairs that overlap are added to Data::forced_pairs; returns how many.
+int CheckLeftOutPairs(const Model& model, const State& end, Data* data) {
   for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
-    data->X_WB[b] = data->problem.EndPose(b, data->z);
+    data->X_WB[b] = end.X_WB(model, b);
     data->inflation[b] = 0.0;
   }
   data->broad.FindPairs(data->X_WB, data->inflation, &data->candidates);
@@ -90,90 +94,161 @@ int CheckLeftOutPairs(const Model& model, Data* data) {
   return missing;
 }
 
-// Whether the velocities of a solution z exceed options.max_speed or max_angular_speed (see FindDivergence).
-bool ExceedsSpeedLimits(const Model& model, const StepperOptions& options, const Eigen::VectorXd& z) {
-  for (int k = 0; k < model.num_moving(); ++k) {
-    const int iv = Model::v_offset(k);
-    if (z.segment<3>(iv).norm() > options.max_speed || z.segment<3>(iv + 3).norm() > options.max_angular_speed) {
+// Whether the velocities of an island's solution z exceed options.max_speed or max_angular_speed (see FindDivergence).
+bool ExceedsSpeedLimits(const StepperOptions& options, const StepProblem& problem, const Eigen::VectorXd& z) {
+  for (size_t i = 0; i < problem.slots().size(); ++i) {
+    if (z.segment<3>(6 * i).norm() > options.max_speed || z.segment<3>(6 * i + 3).norm() > options.max_angular_speed) {
       return true;
     }
   }
   return false;
 }
 
-// One solve of the step from `state`; with the broad phase, re-solved while the end-of-step check finds pairs left out
-// of the NCP overlapping (no pair may interpenetrate at the step end, in or out of the NCP).
-NcpSummary SolveWithBroadPhaseRounds(const Model& model, const StepperOptions& options, double h, const State& state,
-                                     const Eigen::VectorXd* wrench, Data* data, StepReport* report) {
-  data->forced_pairs.clear();
-  for (int round = 1;; ++round) {
-    data->problem.BeginStep(state, h, wrench);
-    if (data->broad_phase) SelectPairs(model, options, h, state, data);
-    NcpSummary result = SolveWithRetryLadder(model, options, state, data, report);
-    report->pairs_in_ncp = static_cast<int>(data->problem.blocks().size());
-    if (!data->broad_phase || !data->z.allFinite()) return result;
-    const int missing = CheckLeftOutPairs(model, data);
-    if (missing == 0) return result;
-    report->broad_phase_additions += missing;
-    if (round == Data::kMaxBroadPhaseRounds) {
-      result.converged = false;
-      return result;
-    }
-  }
-}
+// What an island's step reads besides its own workspace (shared by the threads, read only).
+struct IslandStepInputs {
+  const Model* model;
+  const StepperOptions* options;
+  const Eigen::VectorXd* wrench;
+  State* state;  // each island reads and writes only its own bodies' slots
+};
 
-// Advances the state by h; when the solve fails, by two halves instead, down to h / 2^kMaxSubstepDepth, where the
-// best finite iterate is accepted and reported as not converged. Returns false if the state could not be advanced.
-bool Advance(const Model& model, const StepperOptions& options, double h, int depth, const Eigen::VectorXd* wrench,
-             State* state, Data* data, StepReport* report) {
-  Eigen::VectorXd& backup = data->z_backup[depth];
-  backup = data->z;
-  if (data->broad_phase) data->problem.ActivePairs(&data->pairs_backup[depth]);
-  const bool had_warm_start = data->has_warm_start;
-  NcpSummary result = SolveWithBroadPhaseRounds(model, options, h, *state, wrench, data, report);
+// Advances the island's bodies in *state by h; when the solve fails, by two halves instead, down to
+// h / 2^kMaxSubstepDepth, where the best finite iterate is accepted and reported as not converged. Returns false if
+// the island could not be advanced.
+bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve* island) {
+  const Model& model = *in.model;
+  const StepperOptions& options = *in.options;
+  State* state = in.state;
+  StepProblem& problem = island->problem;
+  StepReport* report = &island->report;
+  Eigen::VectorXd& backup = island->z_backup[depth];
+  backup = island->z;
+  const bool had_warm_start = island->has_warm_start;
+  problem.BeginStep(*state, h, in.wrench);
+  NcpSummary result = SolveWithRetryLadder(model, options, *state, island, report);
   // A solution in which a body passed through another is no solution of the step (tunnelling): solve again from a
   // cold start (the start-of-step closest points, on the near side), and if it still crosses, split the step.
-  bool crossed = data->z.allFinite() && FindCrossing(model, *state, data->problem, data->z, nullptr) >= 0;
-  if (crossed && data->has_warm_start) {
-    data->has_warm_start = false;
-    result = SolveWithBroadPhaseRounds(model, options, h, *state, wrench, data, report);
-    crossed = data->z.allFinite() && FindCrossing(model, *state, data->problem, data->z, nullptr) >= 0;
+  bool crossed = island->z.allFinite() && FindCrossing(model, *state, problem, island->z, nullptr) >= 0;
+  if (crossed && island->has_warm_start) {
+    island->has_warm_start = false;
+    result = SolveWithRetryLadder(model, options, *state, island, report);
+    crossed = island->z.allFinite() && FindCrossing(model, *state, problem, island->z, nullptr) >= 0;
   }
   if (crossed) {
     report->crossings++;
     result.converged = false;
   }
   if (!result.converged && depth < Data::kMaxSubstepDepth) {
-    if (data->broad_phase) data->LayOut(data->pairs_backup[depth], nullptr);  // backup is laid out for these
-    data->z = backup;
-    data->has_warm_start = had_warm_start && !crossed;
+    island->z = backup;
+    island->has_warm_start = had_warm_start && !crossed;
     report->substeps += 1;
-    return Advance(model, options, h / 2, depth + 1, wrench, state, data, report) &&
-           Advance(model, options, h / 2, depth + 1, wrench, state, data, report);
+    return AdvanceIsland(in, h / 2, depth + 1, island) && AdvanceIsland(in, h / 2, depth + 1, island);
   }
-  if (!std::isfinite(result.residual) || !data->z.allFinite()) {
-    data->has_warm_start = false;  // the state is left as it was; the next step starts cold
+  if (!std::isfinite(result.residual) || !island->z.allFinite()) {
+    island->has_warm_start = false;
     report->converged = false;
     return false;
   }
   // Even the shortest sub-step crossed: refuse the step rather than let the body through (unless its velocities are
   // beyond the health limits: Step then refuses it as diverged, the more telling fault).
-  if (crossed && !ExceedsSpeedLimits(model, options, data->z)) {
-    data->has_warm_start = false;
+  if (crossed && !ExceedsSpeedLimits(options, problem, island->z)) {
+    island->has_warm_start = false;
     report->converged = false;
     report->fault = StepFault::kCrossing;
-    FindCrossing(model, *state, data->problem, data->z, &report->fault_detail);
+    FindCrossing(model, *state, problem, island->z, &report->fault_detail);
     return false;
   }
-  StepProblem& problem = data->problem;
   report->converged = report->converged && result.converged;
   report->residual = std::max(report->residual, result.residual);
-  const NcpError error = ComputeNcpError(problem, data->z, &data->ncp_error_rows);
+  const NcpError error = ComputeNcpError(problem, island->z, &island->ncp_error_rows);
   report->complementarity_error = std::max(report->complementarity_error, error.complementarity);
-  problem.Contacts(data->z, &data->contacts);
-  WriteState(model, problem, data->z, h, state);
-  data->has_warm_start = true;
+  problem.Contacts(island->z, &island->contacts);
+  WriteState(model, problem, island->z, state);
+  island->has_warm_start = true;
   return true;
+}
+
+// The step of island `index` of Data (a ThreadPool task).
+void StepIsland(void* context, int index) {
+  auto* task = static_cast<std::pair<const IslandStepInputs*, Data*>*>(context);
+  IslandSolve* island = task->second->islands[index].get();
+  island->report = StepReport();
+  island->report.converged = true;
+  island->advanced = AdvanceIsland(*task->first, task->first->options->h, 0, island);
+}
+
+// Adds an island's report to the step's: counts add up, residuals take the largest, the first island's fault wins.
+void MergeReport(const StepReport& island, StepReport* step) {
+  step->converged = step->converged && island.converged;
+  step->cold_restarts += island.cold_restarts;
+  step->smoothed_solves += island.smoothed_solves;
+  step->ipopt_solves += island.ipopt_solves;
+  step->substeps += island.substeps;
+  step->crossings += island.crossings;
+  step->iterations += island.iterations;
+  step->residual = std::max(step->residual, island.residual);
+  step->complementarity_error = std::max(step->complementarity_error, island.complementarity_error);
+  if (step->fault == StepFault::kNone && island.fault != StepFault::kNone) {
+    step->fault = island.fault;
+    step->fault_detail = island.fault_detail;
+  }
+}
+
+// Solves the step's islands from `state` (at the step start) and advances *state; returns false if an island could
+// not be advanced (the state is then partly advanced: Step restores it).
+bool SolveIslands(const Model& model, const StepperOptions& options, const Eigen::VectorXd* wrench, State* state,
+                  Data* data, StepReport* report) {
+  PartitionIslands(model, data);
+  for (int i = 0; i < data->num_islands; ++i) GatherIsland(*data, data->islands[i].get());
+  const IslandStepInputs inputs{&model, &options, wrench, state};
+  std::pair<const IslandStepInputs*, Data*> task(&inputs, data);
+  const int threads = std::min(ResolveThreadCount(options.threads), data->num_islands);
+  if (threads > 1) {
+    if (!data->pool || data->pool->threads() != ResolveThreadCount(options.threads)) {
+      data->pool = std::make_unique<ThreadPool>(ResolveThreadCount(options.threads));
+    }
+    data->pool->Run(data->num_islands, StepIsland, &task);
+  } else {
+    for (int i = 0; i < data->num_islands; ++i) StepIsland(&task, i);
+  }
+  bool advanced = true;
+  report->islands = data->num_islands;
+  for (int i = 0; i < data->num_islands; ++i) {
+    const IslandSolve& island = *data->islands[i];
+    MergeReport(island.report, report);
+    advanced = advanced && island.advanced;
+    report->largest_island = std::max(report->largest_island, static_cast<int>(island.slots.size()));
+    if (island.advanced) ScatterIsland(island, data);
+  }
+  data->has_warm_start = advanced;
+  return advanced;
+}
+
+// Advances the state by one step: the islands' solves; with the broad phase, solved again from the step start while
+// the end-of-step check finds pairs left out of the NCP overlapping (no pair may interpenetrate at the step end, in or
+// out of the NCP). Returns false if the state could not be advanced.
+bool Advance(const Model& model, const StepperOptions& options, const Eigen::VectorXd* wrench, State* state,
+             Data* data, StepReport* report) {
+  data->forced_pairs.clear();
+  const bool had_warm_start = data->has_warm_start;
+  for (int round = 1;; ++round) {
+    if (data->broad_phase) {
+      data->problem.BeginStep(*state, options.h, wrench);  // for the seeds of new pairs
+      SelectPairs(model, options, options.h, *state, data);
+    }
+    report->pairs_in_ncp = static_cast<int>(data->problem.blocks().size());
+    if (!SolveIslands(model, options, wrench, state, data, report)) return false;
+    if (!data->broad_phase) return true;
+    const int missing = CheckLeftOutPairs(model, *state, data);
+    if (missing == 0) return true;
+    report->broad_phase_additions += missing;
+    if (round == Data::kMaxBroadPhaseRounds) {
+      report->converged = false;
+      return true;
+    }
+    *state = data->state_backup;  // solve the step again with the pairs added
+    data->has_warm_start = had_warm_start;
+  }
 }
 
 }  // namespace
@@ -204,7 +279,7 @@ StepReport Step(const Model& model, const StepperOptions& options, State* state,
   }
   data->state_backup = *state;
   const double t_end = state->t + options.h;
-  report.advanced = Advance(model, options, options.h, 0, external_wrench_W, state, data, &report);
+  report.advanced = Advance(model, options, external_wrench_W, state, data, &report);
   if (report.advanced && FindDivergence(model, *state, options.max_speed, options.max_angular_speed,
                                         &report.fault_detail)) {
     report.advanced = report.converged = false;

@@ -21,7 +21,8 @@ void ExpectSolversAgree(const Model& model, double h, int steps) {
   data.problem.UpdateTangentAxes(&guess);
   data.problem.PredictClosestPoints(&guess);
   Eigen::VectorXd newton = guess, ipopt = guess;
-  ASSERT_TRUE(data.solver.Solve(data.problem, options.newton, &newton).converged);
+  SemismoothNewton solver(data.problem.size(), /*sparse=*/data.broad_phase);
+  ASSERT_TRUE(solver.Solve(data.problem, options.newton, &newton).converged);
   const NcpSummary r = SolveNcpWithIpopt(data.problem, IpoptNcpOptions(), &ipopt);
   EXPECT_TRUE(r.termination == NcpTermination::kConverged || r.termination == NcpTermination::kInaccurate)
       << r.BriefReport();  // Ipopt reported a solution

@@ -3,16 +3,19 @@
 // must outlive it. Also the contact results of a step and the warm start (save, restore, clear).
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "implicit_sim/core/base/thread_pool.h"
 #include "implicit_sim/core/geometry/broad_phase.h"
 #include "implicit_sim/core/model/model.h"
 #include "implicit_sim/core/model/state.h"
 #include "implicit_sim/core/ncp/semismooth_newton.h"
 #include "implicit_sim/core/step/step_problem.h"
+#include "implicit_sim/core/step/step_report.h"
 
 namespace implicit_sim {
 
@@ -28,47 +31,70 @@ struct ContactResult {
   double slip_speed = 0.0;                           // tangential relative speed at the contact (m/s)
 };
 
+// One island's solve (step/islands.h): the moving bodies joined by pairs in the NCP or by joints, with their joints and
+// pairs, as a step problem of its own with its own solvers, warm start, retry ladder and sub-steps.
+struct IslandSolve {
+  explicit IslandSolve(const Model& model);
+  // --- membership (ascending): velocity slots, model joints, model pairs and their blocks in Data::problem ---
+  std::vector<int> slots, joints, pairs, blocks;
+  std::vector<int> next_slots, next_joints, next_pairs, new_blocks;  // PartitionIslands' workspace
+  // --- the island's problem and its solvers: dense LU up to kDenseSizeLimit unknowns, sparse (KLU) above, where a
+  // dense LU would cost O(n^3) per iteration (a pile, or a 1000-gon disc: one pair with about 1000 unknowns) ---
+  StepProblem problem;
+  SemismoothNewton dense_solver, sparse_solver;
+  SemismoothNewton& solver() { return problem.size() > kDenseSizeLimit ? sparse_solver : dense_solver; }
+  static constexpr int kDenseSizeLimit = 200;
+  // --- the warm start (gathered from Data::z) and the workspace of the island's retry ladder and sub-steps ---
+  bool has_warm_start = false;
+  Eigen::VectorXd z;               // the solution (the warm start of the next solve)
+  Eigen::VectorXd z_start;         // the initial guess of the current solve
+  Eigen::VectorXd z_best;          // the best iterate of the ladder so far
+  Eigen::VectorXd ncp_error_rows;  // the raw rows of the accepted solution (ncp_error.h)
+  std::vector<Vec3> axes_warm_failed;
+  std::vector<Eigen::VectorXd> z_backup;  // per sub-step depth
+  // --- outputs of the island's step ---
+  StepReport report;
+  bool advanced = false;
+  std::vector<ContactResult> contacts;  // one per pair, in the order of `pairs`
+};
+
 class Data {
  public:
   static constexpr int kMaxSubstepDepth = 4;  // a failed step is split down to h / 16
   static constexpr int kMaxBroadPhaseRounds = 4;  // re-solves of one step after its end-of-step check added pairs
-  // kAuto: every pair in every NCP (a dense solve) for models with at most kAllPairsLimit pairs, where that is
-  // cheaper than the bookkeeping and every pair's exact gap is reported at every step; the broad phase with the
-  // sparse solve above that.
+  // kAuto: every pair in every NCP for models with at most kAllPairsLimit pairs, where that is cheaper than the
+  // bookkeeping and every pair's exact gap is reported at every step; the broad phase above that.
   enum class PairSelection { kAuto, kAllPairs, kBroadPhase };
   static constexpr int kAllPairsLimit = 16;
-  // NCPs with more unknowns than this are solved in sparse mode (see semismooth_newton.h) even with every pair in
-  // them: a 1000-gon disc has one pair with about 1000 unknowns, whose dense LU costs O(n^3) per iteration.
-  static constexpr int kDenseSizeLimit = 200;
   explicit Data(const Model& model, PairSelection selection = PairSelection::kAuto);
+  ~Data();
   // Whether this Data was built from `model` (the very object: the step problem and the broad phase refer to it).
   bool BelongsTo(const Model& model) const { return &model == model_; }
   // Lays the problem and the solution vectors out for `pairs` (model pair indices, ascending), carrying z_old over
   // into z_remap (the blocks of new pairs are zero and listed in new_blocks).
   void LayOut(const std::vector<int>& pairs, const Eigen::VectorXd* z_old);
+  // Levenberg-Marquardt fallbacks of every island's Newton solver so far.
+  int lm_fallbacks() const;
 
  private:
   const Model* model_;
 
  public:
-  // --- the step problem and its solvers ---
+  // --- the step problem of the whole model: the layout of the warm start z (its pairs and their tangent axes) ---
   const bool broad_phase;
   StepProblem problem;
-  const bool sparse;  // broad_phase or more than kDenseSizeLimit unknowns
-  SemismoothNewton solver;
-  BroadPhase broad;
   // --- the warm start (see WarmStart) ---
   Eigen::VectorXd z;            // the last solution (warm start of the next step)
   bool has_warm_start = false;
-  // --- workspace of the current step and its retry ladder ---
-  Eigen::VectorXd z_start;      // the initial guess of the current solve
-  Eigen::VectorXd z_best;       // the best iterate of the ladder so far
-  Eigen::VectorXd ncp_error_rows;  // the raw rows of the accepted solution (ncp_error.h)
-  std::vector<Vec3> axes_warm_failed;
-  std::vector<Eigen::VectorXd> z_backup;  // per sub-step depth
-  std::vector<std::vector<int>> pairs_backup;  // per sub-step depth: the pairs z_backup is laid out for
+  // --- the islands of the current step (the first num_islands entries; step/islands.h) and their threads ---
+  std::vector<std::unique_ptr<IslandSolve>> islands;
+  int num_islands = 0;
+  std::vector<int> island_root;     // per velocity slot: union-find parent (the root is an island's lowest slot)
+  std::vector<int> island_of_slot;  // per velocity slot: its island
+  std::unique_ptr<ThreadPool> pool;  // built by the first step with more than one thread
   State state_backup;  // the state before the step, restored when the step is not accepted
   // --- broad-phase workspace ---
+  BroadPhase broad;
   std::vector<int> pairs, candidates, forced_pairs, merged, new_blocks;
   std::vector<Pose> X_WB;
   std::vector<double> inflation;

@@ -28,6 +28,9 @@ struct StepperOptions {
   // A cold step (the first, or after a reset or a set state) refuses to start from bodies overlapping by more than
   // this (m, [0, 1]): the step's end-of-step contact would throw them apart with an impulse of overlap / h.
   double overlap_tolerance = 1e-6;
+  // Threads that solve the islands of a step (step/islands.h), [0, 256]; 0: the hardware's cores. Results are
+  // bit-identical for any value.
+  int threads = 0;
   // Checks every row of the options table; on failure sets *error to a message naming the option, its range and
   // unit, and the bad value.
   bool IsValid(std::string* error) const;
@@ -58,7 +61,7 @@ struct OptionRow {
   void (*set)(StepperOptions* options, double value);
 };
 
-constexpr int kNumOptionRows = 14;
+constexpr int kNumOptionRows = 15;
 const std::array<OptionRow, kNumOptionRows>& OptionTable();
 
 // The row with this field, ROS parameter or runner flag; nullptr when none (an empty name finds nothing).

@@ -17,10 +17,10 @@
 
 namespace implicit_sim {
 
-// Solves the step NCP of data->problem (BeginStep called for `state`, its pairs laid out) and leaves the best solution
-// in data->z (and its tangent axes in the problem); does not touch the state. Counts the rungs and iterations in
-// *report. The summary is that of the accepted solve.
-NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& options, const State& state, Data* data,
-                                StepReport* report);
+// Solves the step NCP of an island (island->problem: BeginStep called for `state`, its pairs laid out) from its warm
+// start if it has one and leaves the best solution in island->z (and its tangent axes in the problem); does not touch
+// the state. Counts the rungs and iterations in *report. The summary is that of the accepted solve.
+NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& options, const State& state,
+                                IslandSolve* island, StepReport* report);
 
 }  // namespace implicit_sim

@@ -1,8 +1,10 @@
 // The mixed nonlinear complementarity problem of one geometrically implicit step (paper eq. 10-11 and Appendix
 // eq. 19-22), in the normal-distance form of doc/method.md (pitfall 1), reformulated with the Fischer-Burmeister function.
 //
-// Unknowns z (everything at the END of the step):
-//   per moving body (slot k): nu_k = (v_WB, w_WB), 6 values, at z[6k].
+// A problem holds a set of moving bodies (an island, step/islands.h; by default every moving body of the model) and the
+// joints and pairs among them. Unknowns z (everything at the END of the step):
+//   per moving body of the problem (the i-th of slots()): nu = (v_WB, w_WB), 6 values, at z[6i] (for the whole model
+//   that is z[Model::v_offset(k)] for slot k).
 //   per model joint j, a block at joint_offset(j) (see AddJointRows in step_joints.cpp and joints.h):
 //     lambda (num_equalities)  multipliers of the joint equalities (N for linear rows, N m for angular rows)
 //     l_lo, l_hi              limit multipliers (N m or N), if the joint is limited
@@ -55,6 +57,8 @@ constexpr int kA1 = 0, kA2 = 3, kN = 6, kD = 9, kSt = 10, kSo = 11, kSr = 12, kA
 struct PairBlock {
   int pair = -1;    // the model pair
   int offset = 0;   // index of the block in z and in the rows
+  int body1 = -1;   // the pair's bodies as indices into the problem's bodies (StepProblem::bodies())
+  int body2 = -1;
   int k1 = 0;       // number of inequalities of body 1
   int k2 = 0;       // number of inequalities of body 2
   int size() const { return 13 + k1 + k2 + 2; }
@@ -67,13 +71,26 @@ struct ContactResult;  // step/data.h
 
 class StepProblem final : public NcpProblem {
  public:
-  // With all_pairs every model pair is in the problem; otherwise none until SetActivePairs.
+  // Every moving body and joint of the model; with all_pairs every model pair too, otherwise none until SetActivePairs.
   explicit StepProblem(const Model& model, bool all_pairs = true);
+
+  // Restricts the problem to the moving bodies of `slots` (velocity slots, ascending) and the joints `joints` (model
+  // joint indices, ascending, each between bodies of `slots` or the world and fixed bodies), with no pair; the pairs
+  // follow by SetActivePairs (each with at least one body in `slots`, the other in `slots` or fixed).
+  void SetBodies(const std::vector<int>& slots, const std::vector<int>& joints);
+  // The moving bodies of the problem (velocity slots, ascending: the i-th has its velocities at z[6i]), its joints.
+  const std::vector<int>& slots() const { return slots_; }
+  const std::vector<int>& joints() const { return joints_; }
+  // The bodies the problem knows (model body indices, ascending): its moving bodies and every fixed body.
+  const std::vector<int>& bodies() const { return bodies_; }
+  // Where the velocities of model body b are in z (-1 if b is fixed or not in the problem).
+  int body_column(int body) const;
 
   int size() const override { return size_; }
   // Unknowns before the first pair block: the body velocities and the joint blocks.
   int pair_base() const { return pair_base_; }
-  int joint_offset(int joint) const { return joint_offset_[joint]; }
+  int joint_offset(int joint) const { return joint_offset_[joint]; }  // -1 when the joint is not in the problem
+  int joint_size(int joint) const { return model_.joints[joint].size(); }
   const std::vector<PairBlock>& blocks() const { return blocks_; }
   // The model pairs in the problem, in block order (ascending).
   void ActivePairs(std::vector<int>* pairs) const;
@@ -98,6 +115,7 @@ class StepProblem final : public NcpProblem {
   void ResetTangentAxis(int block, const Eigen::VectorXd& z);
   const std::vector<Vec3>& tangent_axes() const { return tangent_axis_; }
   void set_tangent_axes(const std::vector<Vec3>& axes) { tangent_axis_ = axes; }
+  void set_tangent_axis(int block, const Vec3& axis) { tangent_axis_[block] = axis; }
 
   // Warm-start predictor: translates the closest points of *z with their bodies over the step (a += h v0; not as
   // material points: a rolling sphere's contact point moves with its centre) and sets d = n . (a1 - a2), so that a
@@ -135,7 +153,7 @@ class StepProblem final : public NcpProblem {
   // for a joint without limits): the step-average effort the limit exerted.
   double JointLimitEffort(const Eigen::VectorXd& z, int joint) const;
 
-  // End-of-step pose of body b for velocities in z.
+  // End-of-step pose of model body b (one of bodies()) for velocities in z.
   Pose EndPose(int body, const Eigen::VectorXd& z) const;
 
   double force_scale() const { return force_scale_; }
@@ -161,7 +179,10 @@ class StepProblem final : public NcpProblem {
   };
 
   void UpdateBodies(const Eigen::VectorXd& z) const;
-  Eval EvaluateInequality(int body, int k, const Vec3& p_W) const;
+  // The index of model body b in bodies_ (-1 if absent).
+  int LocalBody(int body) const;
+  // `local`: an index into bodies_.
+  Eval EvaluateInequality(int local, int k, const Vec3& p_W) const;
   void EvaluateAll(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const;
   void AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const;
   void AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const;
@@ -180,7 +201,14 @@ class StepProblem final : public NcpProblem {
                             const BodyEnd& eC, const JointGradient& G_q, Eigen::VectorXd* Phi) const;
   void AddJointDamping(const Joint& joint, const BodyEnd& eP, const BodyEnd& eC, const JointGradient& G_q,
                        Eigen::VectorXd* Phi) const;
-  const BodyEnd& ParentEnd(const Joint& joint) const { return joint.parent < 0 ? world_end_ : end_[joint.parent]; }
+  struct JointBodies {  // a joint's parent (-1: the world) and child as indices into bodies_
+    int parent = -1, child = -1;
+  };
+  const BodyEnd& ParentEnd(int joint) const {
+    const int parent = joint_bodies_[joint].parent;
+    return parent < 0 ? world_end_ : end_[parent];
+  }
+  const BodyEnd& ChildEnd(int joint) const { return end_[joint_bodies_[joint].child]; }
   // Adds `block` to J at (row, col), dense or sparse (every call emits the same entries for the same layout, so that
   // the sparse pattern recorded once stays valid). Rows of locked velocities become "velocity = 0".
   template <typename Block>
@@ -193,27 +221,34 @@ class StepProblem final : public NcpProblem {
     Mat3 dF_dn;
     double lr, dlr_dln, dlr_dsr;
   };
-  void AddContactWrench(int c, int body, double sign, const Vec3& r, const ContactWrench& wrench,
+  void AddContactWrench(int c, int local, double sign, const Vec3& r, const ContactWrench& wrench,
                         Eigen::VectorXd* Phi) const;
 
   const Model& model_;
+  const double model_force_scale_;  // Model::ForceScale(), computed once
+  std::vector<int> slots_, joints_, bodies_;
+  std::vector<int> fixed_bodies_;    // the model's fixed bodies, ascending
+  std::vector<int> slot_body_;       // per moving body of the problem: its index into bodies_
+  std::vector<JointBodies> joint_bodies_;  // per model joint (entries of joints_ only)
   std::vector<PairBlock> blocks_;
-  std::vector<BodyStep> start_;
-  mutable std::vector<BodyEnd> end_;  // the current iterate's end-of-step bodies (a cache of Evaluate)
+  std::vector<BodyStep> start_;       // per entry of bodies_
+  mutable std::vector<BodyEnd> end_;  // per entry of bodies_: the current iterate's end-of-step bodies (a cache)
   std::vector<Vec3> tangent_axis_;   // per pair
-  std::vector<int> joint_offset_;    // per joint
+  std::vector<int> joint_offset_;    // per model joint (-1 when not in the problem)
   int pair_base_ = 0;
   // Per joint, at the start of the step: the gradients of the equalities and of the position. The joint forces act
   // along them over the step while the equalities hold at its end (the SHAKE discretization; see AddJointRows).
   std::vector<std::array<JointGradient, 6>> joint_equality_start_;
   std::vector<JointGradient> joint_position_start_;
   BodyEnd world_end_;                // the world as a parent: identity pose, no velocity unknowns
-  Eigen::VectorXd external_wrench_W_;  // per moving body slot: force, torque (world, at the centre of mass)
+  Eigen::VectorXd external_wrench_W_;  // per moving body of the problem: force, torque (world, at the centre of mass)
   int size_ = 0;
   double h_ = 0.0;
   double force_scale_ = 1.0;
   std::vector<char> complementarity_kind_;  // per row: 0 equation, 1 complementarity, 2 normal-force complementarity
   std::vector<char> locked_row_;             // per body row: the velocity is locked
+  std::vector<PairBlock> old_blocks_;        // SetActivePairs' copies of the previous layout
+  std::vector<Vec3> old_axes_;
   bool regular_separated_friction_ = false;
   int pattern_version_ = 0;
   // The evaluation in progress: its mode and where it writes the Jacobian (at most one non-null; both null: none).

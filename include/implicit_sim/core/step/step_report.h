@@ -28,6 +28,8 @@ struct StepReport {
   int crossings = 0;            // solves rejected because a body passed through another (see FindCrossing) and split
   int broad_phase_additions = 0;  // pairs left out by the broad phase, found overlapping at the step end and added
   int pairs_in_ncp = 0;         // pairs in the NCP of the (last) solve
+  int islands = 0;              // islands of the (last) solve (step/islands.h)
+  int largest_island = 0;       // moving bodies in the largest of them
   int iterations = 0;           // Newton iterations, all attempts
   double residual = 0.0;        // |Phi|_2 of the accepted solution (the largest over sub-steps)
   double complementarity_error = 0.0;
