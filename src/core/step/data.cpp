@@ -31,6 +31,7 @@ Data::~Data() = default;
 
 void Data::LayOut(const std::vector<int>& pairs_in_ncp, const Eigen::VectorXd* z_old) {
   problem.SetActivePairs(pairs_in_ncp, z_old, &z_remap, &new_blocks);
+  contacts.resize(problem.blocks().size());
 }
 
 int Data::lm_fallbacks() const {
