@@ -18,7 +18,7 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: implicit_sim_run --scene FILE --duration T --dt H --out DIR [--tolerance TOL] [--max-iterations N] "
-    "[--solver newton|ipopt] [--stop-at-rest E:S]";
+    "[--solver newton|ipopt] [--threads N] [--stop-at-rest E:S]";
 
 struct Args {
   std::string scene, out;
