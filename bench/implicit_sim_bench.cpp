@@ -16,6 +16,7 @@
 #include "implicit_sim/core/io/run_output.h"
 #include "implicit_sim/core/step/time_stepper.h"
 #include "implicit_sim/core/model/urdf_loader.h"
+#include "scenario_metrics.h"
 
 namespace {
 using namespace implicit_sim;
@@ -44,6 +45,22 @@ double ParseNumber(const std::string& flag, const std::string& text, double low,
 std::string Field(const std::string& key, const std::string& value) { return "\"" + key + "\": " + value; }
 std::string Quoted(const std::string& s) { return "\"" + s + "\""; }
 
+// The paper scenes' sample at a step end (scenario_metrics.h): the first moving body; P3's contacts by pair name.
+StepSample SampleOf(const Model& model, const State& state, const Data& data) {
+  StepSample s;
+  s.t = state.t;
+  s.kinetic_energy = KineticEnergy(model, state);
+  for (int i = 0; i < 3; ++i) s.v_W[i] = state.v_WB(0)[i], s.w_W[i] = state.w_WB(0)[i];
+  for (const ContactResult& contact : data.contacts) {
+    const std::string name = model.PairName(contact.pair);
+    const int c = name == "ball-sphere_a" ? 0 : name == "ball-sphere_b" ? 1 : -1;
+    if (c < 0) continue;
+    s.closed[c] = contact.normal_force > 1e-9;
+    s.slip_speed[c] = contact.slip_speed;
+  }
+  return s;
+}
+
 // Runs one case and prints its JSON line.
 void Run(const Case& c, const std::string& scenes_dir, double max_wall_s) {
   const Model model = c.scenario == "S1"
@@ -58,11 +75,13 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s) {
   summary.kinetic_energy_initial = KineticEnergy(model, state);
   const long steps = std::lround(c.duration / c.h);
   double iterations = 0.0;
+  ScenarioMetrics metrics(c.scenario, summary.kinetic_energy_initial);
   for (long i = 0; i < steps; ++i) {
     const StepReport report = Step(model, options, &state, &data);
     if (!report.advanced) break;
     summary.Add(report, data);
     iterations += report.iterations;
+    if (metrics.NeedsSamples()) metrics.Observe(SampleOf(model, state, data));
     if (summary.wall_s > max_wall_s) break;
   }
   summary.kinetic_energy_final = KineticEnergy(model, state);
@@ -92,8 +111,11 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s) {
       Field("kinetic_energy_initial", FormatNumber(summary.kinetic_energy_initial)),
       Field("kinetic_energy_final", FormatNumber(summary.kinetic_energy_final)),
   };
+  std::vector<std::string> all_fields = fields;  // then the engine and the scenario's accuracy (scenario_metrics.h)
+  all_fields.push_back(Field("engine", Quoted("implicit_sim")));
+  for (const std::string& field : metrics.JsonFields()) all_fields.push_back(field);
   std::string line = "{";
-  for (size_t i = 0; i < fields.size(); ++i) line += (i ? ", " : "") + fields[i];
+  for (size_t i = 0; i < all_fields.size(); ++i) line += (i ? ", " : "") + all_fields[i];
   std::cout << line << "}" << std::endl;
 }
 
@@ -125,13 +147,15 @@ std::vector<Case> AllCases() {
 int main(int argc, char** argv) {
   const char* usage =
       "usage: implicit_sim_bench [--scenario P1|P2|P3|S1] [--shape sphere|ellipsoid] [--n N] [--seed S] "
-      "[--duration T] [--dt H] [--max-wall S] [--scenes-dir DIR]";
+      "[--duration T] [--dt H] [--max-wall S] [--scenes-dir DIR]"
+      " [--variant p1_disc_rolling|p1_ngon100|...]";
   std::map<std::string, std::string> values;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
     const bool known = flag == "--scenario" || flag == "--shape" || flag == "--n" || flag == "--seed" ||
                        flag == "--duration" || flag == "--dt" || flag == "--scenes-dir" || flag == "--max-wall";
-    if (!known || i + 1 >= argc) {
+    const bool known_variant = flag == "--variant";  // a P case by its variant (AllCases), e.g. p1_ngon100
+    if (!(known || known_variant) || i + 1 >= argc) {
       std::cerr << "implicit_sim_bench: bad argument '" << flag << "'\n" << usage << "\n";
       return 2;
     }
@@ -165,13 +189,18 @@ int main(int argc, char** argv) {
         c.h = 0.005;
         c.duration = 2.0;
         c.variant = shape + "_n" + std::to_string(c.n);
+        if (values.count("--variant")) throw std::invalid_argument("--variant applies to P1, P2 and P3 only");
       } else {
         bool found = false;
         for (const Case& known : AllCases()) {
-          if (known.scenario == scenario && !found) {
+          const bool variant_ok = !values.count("--variant") || known.variant == values["--variant"];
+          if (known.scenario == scenario && variant_ok && !found) {
             c = known;
             found = true;
           }
+        }
+        if (!found && values.count("--variant")) {
+          throw std::invalid_argument("no case " + scenario + " with --variant '" + values["--variant"] + "'");
         }
         if (!found) throw std::invalid_argument("--scenario must be P1, P2, P3 or S1, got '" + scenario + "'");
         if (values.count("--shape") || values.count("--n") || values.count("--seed")) {
