@@ -3,6 +3,7 @@
 //   implicit_sim_bench                                   every case
 //   implicit_sim_bench --scenario S1 --shape ellipsoid --n 100 --duration 2 [--dt 0.005] [--seed 42]
 //   implicit_sim_bench --scenario P3 [--duration 5] [--dt 0.01] [--scenes-dir DIR]
+//   implicit_sim_bench --scenario P1 --variant p1_ngon100         a P case by its variant (AllCases below)
 // --max-wall S (default 300 s of solver time per run) stops a run early; its line then says "completed": false.
 #include <cmath>
 #include <cstdlib>
@@ -32,19 +33,6 @@ struct Case {
   unsigned seed = 42;
 };
 
-double ParseNumber(const std::string& flag, const std::string& text, double low, double high) {
-  char* end = nullptr;
-  const double value = std::strtod(text.c_str(), &end);
-  if (end == text.c_str() || *end != '\0' || !(value >= low && value <= high)) {
-    throw std::invalid_argument(flag + " must be a number in [" + FormatNumber(low) + ", " + FormatNumber(high) +
-                                "], got '" + text + "'");
-  }
-  return value;
-}
-
-std::string Field(const std::string& key, const std::string& value) { return "\"" + key + "\": " + value; }
-std::string Quoted(const std::string& s) { return "\"" + s + "\""; }
-
 // The paper scenes' sample at a step end (scenario_metrics.h): the first moving body; P3's contacts by pair name.
 StepSample SampleOf(const Model& model, const State& state, const Data& data) {
   StepSample s;
@@ -61,6 +49,19 @@ StepSample SampleOf(const Model& model, const State& state, const Data& data) {
   return s;
 }
 
+double ParseNumber(const std::string& flag, const std::string& text, double low, double high) {
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() || *end != '\0' || !(value >= low && value <= high)) {
+    throw std::invalid_argument(flag + " must be a number in [" + FormatNumber(low) + ", " + FormatNumber(high) +
+                                "], got '" + text + "'");
+  }
+  return value;
+}
+
+std::string Field(const std::string& key, const std::string& value) { return "\"" + key + "\": " + value; }
+std::string Quoted(const std::string& s) { return "\"" + s + "\""; }
+
 // Runs one case and prints its JSON line.
 void Run(const Case& c, const std::string& scenes_dir, double max_wall_s) {
   const Model model = c.scenario == "S1"
@@ -70,18 +71,18 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s) {
   options.h = c.h;
   Data data(model);
   State state = State::Initial(model);
+  ScenarioMetrics metrics(c.scenario, KineticEnergy(model, state));  // accuracy of the paper scenes
   RunSummary summary;
   summary.h = c.h;
   summary.kinetic_energy_initial = KineticEnergy(model, state);
   const long steps = std::lround(c.duration / c.h);
   double iterations = 0.0;
-  ScenarioMetrics metrics(c.scenario, summary.kinetic_energy_initial);
   for (long i = 0; i < steps; ++i) {
     const StepReport report = Step(model, options, &state, &data);
     if (!report.advanced) break;
     summary.Add(report, data);
-    iterations += report.iterations;
     if (metrics.NeedsSamples()) metrics.Observe(SampleOf(model, state, data));
+    iterations += report.iterations;
     if (summary.wall_s > max_wall_s) break;
   }
   summary.kinetic_energy_final = KineticEnergy(model, state);
@@ -147,15 +148,17 @@ std::vector<Case> AllCases() {
 int main(int argc, char** argv) {
   const char* usage =
       "usage: implicit_sim_bench [--scenario P1|P2|P3|S1] [--shape sphere|ellipsoid] [--n N] [--seed S] "
-      "[--duration T] [--dt H] [--max-wall S] [--scenes-dir DIR]"
-      " [--variant p1_disc_rolling|p1_ngon100|...]";
+      "[--duration T] [--dt H] [--max-wall S] [--scenes-dir DIR]";
   std::map<std::string, std::string> values;
   for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--variant" && i + 1 < argc) {  // a P case by its variant (AllCases), e.g. p1_ngon100
+      values["--variant"] = argv[++i];
+      continue;
+    }
     const std::string flag = argv[i];
     const bool known = flag == "--scenario" || flag == "--shape" || flag == "--n" || flag == "--seed" ||
                        flag == "--duration" || flag == "--dt" || flag == "--scenes-dir" || flag == "--max-wall";
-    const bool known_variant = flag == "--variant";  // a P case by its variant (AllCases), e.g. p1_ngon100
-    if (!(known || known_variant) || i + 1 >= argc) {
+    if (!known || i + 1 >= argc) {
       std::cerr << "implicit_sim_bench: bad argument '" << flag << "'\n" << usage << "\n";
       return 2;
     }
