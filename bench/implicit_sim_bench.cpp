@@ -3,6 +3,7 @@
 //   implicit_sim_bench                                   every case
 //   implicit_sim_bench --scenario S1 --shape ellipsoid --n 100 --duration 2 [--dt 0.005] [--seed 42]
 //   implicit_sim_bench --scenario P3 [--duration 5] [--dt 0.01] [--scenes-dir DIR]
+//   implicit_sim_bench --scenario P1 --variant p1_ngon100         a P case by its variant (AllCases below)
 // --max-wall S (default 300 s of solver time per run) stops a run early; its line then says "completed": false.
 #include <cmath>
 #include <cstdlib>
@@ -16,6 +17,7 @@
 #include "implicit_sim/core/io/run_output.h"
 #include "implicit_sim/core/step/time_stepper.h"
 #include "implicit_sim/core/model/urdf_loader.h"
+#include "scenario_metrics.h"
 
 namespace {
 using namespace implicit_sim;
@@ -30,6 +32,22 @@ struct Case {
   int n = 0;
   unsigned seed = 42;
 };
+
+// The paper scenes' sample at a step end (scenario_metrics.h): the first moving body; P3's contacts by pair name.
+StepSample SampleOf(const Model& model, const State& state, const Data& data) {
+  StepSample s;
+  s.t = state.t;
+  s.kinetic_energy = KineticEnergy(model, state);
+  for (int i = 0; i < 3; ++i) s.v_W[i] = state.v_WB(0)[i], s.w_W[i] = state.w_WB(0)[i];
+  for (const ContactResult& contact : data.contacts) {
+    const std::string name = model.PairName(contact.pair);
+    const int c = name == "ball-sphere_a" ? 0 : name == "ball-sphere_b" ? 1 : -1;
+    if (c < 0) continue;
+    s.closed[c] = contact.normal_force > 1e-9;
+    s.slip_speed[c] = contact.slip_speed;
+  }
+  return s;
+}
 
 double ParseNumber(const std::string& flag, const std::string& text, double low, double high) {
   char* end = nullptr;
@@ -53,6 +71,7 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s) {
   options.h = c.h;
   Data data(model);
   State state = State::Initial(model);
+  ScenarioMetrics metrics(c.scenario, KineticEnergy(model, state));  // accuracy of the paper scenes
   RunSummary summary;
   summary.h = c.h;
   summary.kinetic_energy_initial = KineticEnergy(model, state);
@@ -62,6 +81,7 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s) {
     const StepReport report = Step(model, options, &state, &data);
     if (!report.advanced) break;
     summary.Add(report, data);
+    if (metrics.NeedsSamples()) metrics.Observe(SampleOf(model, state, data));
     iterations += report.iterations;
     if (summary.wall_s > max_wall_s) break;
   }
@@ -92,8 +112,11 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s) {
       Field("kinetic_energy_initial", FormatNumber(summary.kinetic_energy_initial)),
       Field("kinetic_energy_final", FormatNumber(summary.kinetic_energy_final)),
   };
+  std::vector<std::string> all_fields = fields;  // then the engine and the scenario's accuracy (scenario_metrics.h)
+  all_fields.push_back(Field("engine", Quoted("implicit_sim")));
+  for (const std::string& field : metrics.JsonFields()) all_fields.push_back(field);
   std::string line = "{";
-  for (size_t i = 0; i < fields.size(); ++i) line += (i ? ", " : "") + fields[i];
+  for (size_t i = 0; i < all_fields.size(); ++i) line += (i ? ", " : "") + all_fields[i];
   std::cout << line << "}" << std::endl;
 }
 
@@ -128,6 +151,10 @@ int main(int argc, char** argv) {
       "[--duration T] [--dt H] [--max-wall S] [--scenes-dir DIR]";
   std::map<std::string, std::string> values;
   for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--variant" && i + 1 < argc) {  // a P case by its variant (AllCases), e.g. p1_ngon100
+      values["--variant"] = argv[++i];
+      continue;
+    }
     const std::string flag = argv[i];
     const bool known = flag == "--scenario" || flag == "--shape" || flag == "--n" || flag == "--seed" ||
                        flag == "--duration" || flag == "--dt" || flag == "--scenes-dir" || flag == "--max-wall";
@@ -165,13 +192,18 @@ int main(int argc, char** argv) {
         c.h = 0.005;
         c.duration = 2.0;
         c.variant = shape + "_n" + std::to_string(c.n);
+        if (values.count("--variant")) throw std::invalid_argument("--variant applies to P1, P2 and P3 only");
       } else {
         bool found = false;
         for (const Case& known : AllCases()) {
-          if (known.scenario == scenario && !found) {
+          const bool variant_ok = !values.count("--variant") || known.variant == values["--variant"];
+          if (known.scenario == scenario && variant_ok && !found) {
             c = known;
             found = true;
           }
+        }
+        if (!found && values.count("--variant")) {
+          throw std::invalid_argument("no case " + scenario + " with --variant '" + values["--variant"] + "'");
         }
         if (!found) throw std::invalid_argument("--scenario must be P1, P2, P3 or S1, got '" + scenario + "'");
         if (values.count("--shape") || values.count("--n") || values.count("--seed")) {
