@@ -74,15 +74,29 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
 
 double SemismoothNewton::LineSearch(const NcpProblem& problem, const NewtonOptions& options,
                                     const Eigen::VectorXd& z, double merit) {
-  // Armijo backtracking on the merit 0.5 |Phi|^2; the accepted point is left in z_trial_.
+  // Armijo backtracking on the merit 0.5 |Phi|^2 against the largest of the last line_search_memory merits
+  // (Grippo-Lampariello-Lucidi; memory 1 is the monotone search); the accepted point is left in z_trial_. The
+  // directional derivative of the merit along a Newton direction is -|Phi|^2 = -2 merit.
+  double reference = merit;
+  for (int i = 0; i < std::min(history_count_, options.line_search_memory); ++i) {
+    reference = std::max(reference, history_[(history_next_ + kMaxMemory - 1 - i) % kMaxMemory]);
+  }
   for (double step = 1.0; step >= options.min_step; step *= 0.5) {
     z_trial_ = z + step * dz_;
     ++summary_->residual_evaluations;
     problem.Evaluate(z_trial_, mode_, &Phi_trial_, nullptr);
     const double trial_merit = 0.5 * Phi_trial_.squaredNorm();
-    if (std::isfinite(trial_merit) && trial_merit <= merit * (1.0 - 2.0 * options.armijo * step)) return step;
+    const double bound = options.line_search_memory > 1 ? reference - 2.0 * options.armijo * step * merit
+                                                        : merit * (1.0 - 2.0 * options.armijo * step);
+    if (std::isfinite(trial_merit) && trial_merit <= bound) return step;
   }
   return 0.0;
+}
+
+void SemismoothNewton::RememberMerit(double merit) {
+  history_[history_next_] = merit;
+  history_next_ = (history_next_ + 1) % kMaxMemory;
+  history_count_ = std::min(history_count_ + 1, kMaxMemory);
 }
 
 NcpSummary SemismoothNewton::Solve(const NcpProblem& problem, const NewtonOptions& options, Eigen::VectorXd* z,
@@ -96,6 +110,7 @@ NcpSummary SemismoothNewton::Solve(const NcpProblem& problem, const NewtonOption
   if (sparse_) lu_.ForgetPivots();  // a solve depends on its inputs only
   Evaluate(problem, *z, true);
   double merit = 0.5 * Phi_.squaredNorm();
+  history_count_ = history_next_ = 0;
   // Relative part: rows such as a1 - a2 - d n carry coordinates, whose rounding error grows with their size.
   const auto tolerance = [&]() { return options.tolerance * (1.0 + z->lpNorm<Eigen::Infinity>()); };
   summary.termination = NcpTermination::kMaxIterations;
@@ -106,6 +121,7 @@ NcpSummary SemismoothNewton::Solve(const NcpProblem& problem, const NewtonOption
       break;
     }
     if (summary.residual <= tolerance()) break;
+    RememberMerit(merit);
     // The LU direction first; where J is singular, the Levenberg-Marquardt one, a descent direction whenever
     // J^T Phi != 0. In dense mode also where the LU direction does not decrease the merit; in sparse mode that is
     // left to the retry ladder, because J^T J fills in (the 1000-gon's body couples to all its 1000 multipliers).

@@ -9,6 +9,7 @@
 // The workspace is sized once per layout; a dense Solve does not allocate.
 #pragma once
 
+#include <array>
 #include <string>
 
 #include <Eigen/Cholesky>
@@ -29,6 +30,8 @@ struct NewtonOptions {
   double armijo = 1e-4;           // sufficient decrease factor
   double min_step = 1e-10;        // smallest line-search step length
   double sparse_regularization = 1e-9;  // delta (see above)
+  // The line search accepts a step that decreases the largest of the last this many merits (1: monotone), [1, 16].
+  int line_search_memory = 1;
   // The allowed ranges are those of the step's options table (step/options.h), which validates these fields.
 };
 
@@ -46,6 +49,7 @@ class SemismoothNewton {
  private:
   void Resize(int n);
   void Evaluate(const NcpProblem& problem, const Eigen::VectorXd& z, bool jacobian);
+  void RememberMerit(double merit);  // into the line search's memory
   // dz_ from Phi_ and the Jacobian: the LU Newton direction, or with least_squares the Levenberg-Marquardt one.
   bool Direction(const NewtonOptions& options, double merit, bool least_squares);
   // The Armijo step length along dz_ from z (0 if none down to min_step); the new point is left in z_trial_.
@@ -62,6 +66,9 @@ class SemismoothNewton {
   Eigen::SparseMatrix<double> normal_sparse_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> sparse_ldlt_;
   int lm_fallbacks_ = 0;
+  static constexpr int kMaxMemory = 16;
+  std::array<double, kMaxMemory> history_{};  // the merits of the last iterates (a ring)
+  int history_next_ = 0, history_count_ = 0;
 };
 
 }  // namespace implicit_sim

@@ -61,7 +61,7 @@ struct OptionRow {
   void (*set)(StepperOptions* options, double value);
 };
 
-constexpr int kNumOptionRows = 15;
+constexpr int kNumOptionRows = 16;
 const std::array<OptionRow, kNumOptionRows>& OptionTable();
 
 // The row with this field, ROS parameter or runner flag; nullptr when none (an empty name finds nothing).
