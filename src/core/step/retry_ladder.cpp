@@ -19,6 +19,7 @@ NcpSummary SolveFromStart(const StepperOptions& options, Data* data, StepReport*
     summary = data->solver.Solve(data->problem, options.newton, &data->z);
   }
   report->iterations += summary.iterations;
+  report->residual_evaluations += summary.residual_evaluations;
   return summary;
 }
 
@@ -43,6 +44,7 @@ class BestAttempt {
 bool NewtonPolish(const StepperOptions& options, Data* data, StepReport* report, NcpSummary* summary) {
   *summary = data->solver.Solve(data->problem, options.newton, &data->z);
   report->iterations += summary->iterations;
+  report->residual_evaluations += summary->residual_evaluations;
   return summary->converged;
 }
 
@@ -54,6 +56,7 @@ bool SmoothingContinuation(const StepperOptions& options, Data* data, StepReport
   for (double mu = 1e-2; mu > 1e-9 && data->z.allFinite(); mu *= 0.1) {
     *summary = data->solver.Solve(data->problem, options.newton, &data->z, mu);
     report->iterations += summary->iterations;
+    report->residual_evaluations += summary->residual_evaluations;
   }
   if (!data->z.allFinite()) return false;
   if (NewtonPolish(options, data, report, summary)) return true;
@@ -66,7 +69,9 @@ bool IpoptThenNewton(const StepperOptions& options, Data* data, StepReport* repo
                      NcpSummary* summary) {
   report->ipopt_solves++;
   data->z = data->z_start;
-  report->iterations += SolveNcpWithIpopt(data->problem, options.IpoptOptions(), &data->z).iterations;
+  const NcpSummary ipopt = SolveNcpWithIpopt(data->problem, options.IpoptOptions(), &data->z);
+  report->iterations += ipopt.iterations;
+  report->residual_evaluations += ipopt.residual_evaluations;
   if (!data->z.allFinite()) return false;
   if (NewtonPolish(options, data, report, summary)) return true;
   best->Offer(*summary, data);

@@ -29,6 +29,7 @@ struct StepReport {
   int broad_phase_additions = 0;  // pairs left out by the broad phase, found overlapping at the step end and added
   int pairs_in_ncp = 0;         // pairs in the NCP of the (last) solve
   int iterations = 0;           // Newton iterations, all attempts
+  int residual_evaluations = 0; // evaluations of Phi by the solvers (Newton's line search included), all attempts
   double residual = 0.0;        // |Phi|_2 of the accepted solution (the largest over sub-steps)
   double complementarity_error = 0.0;
   int active_contacts = 0;      // pairs with normal force > contact_threshold
