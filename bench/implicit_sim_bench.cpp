@@ -5,16 +5,24 @@
 //   implicit_sim_bench --scenario P3 [--duration 5] [--dt 0.01] [--scenes-dir DIR]
 //   implicit_sim_bench --scenario P1 --variant p1_ngon100         a P case by its variant (AllCases below)
 // --max-wall S (default 300 s of solver time per run) stops a run early; its line then says "completed": false.
+// --dump-worst K --dump-dir DIR writes the K hardest steps of each run as step cases (io/step_case.h) for
+// implicit_sim_replay: DIR/<scenario>_<variant>_step<NNNN>.case, NNNN the number of steps before it.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <map>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "implicit_sim/core/io/pile_scene.h"
 #include "implicit_sim/core/io/run_output.h"
+#include "implicit_sim/core/io/step_case.h"
 #include "implicit_sim/core/step/time_stepper.h"
 #include "implicit_sim/core/model/urdf_loader.h"
 #include "scenario_metrics.h"
@@ -62,11 +70,84 @@ double ParseNumber(const std::string& flag, const std::string& text, double low,
 std::string Field(const std::string& key, const std::string& value) { return "\"" + key + "\": " + value; }
 std::string Quoted(const std::string& s) { return "\"" + s + "\""; }
 
+// --dump-worst K --dump-dir DIR (worst = 0: no dumping).
+struct DumpRequest {
+  int worst = 0;
+  std::string dir;
+  std::string command;  // the bench's command line, for the cases' origin
+};
+
+// The K hardest steps of a run, hardest first: a step that did not converge ranks before every step that did, then
+// more Newton iterations rank first; among equals the earlier step stays (a later one must be strictly harder).
+class WorstSteps {
+ public:
+  struct Entry {
+    long index = 0;  // steps before it
+    RecordedOutcome outcome;
+    StepInputs inputs;
+  };
+  explicit WorstSteps(int capacity) : capacity_(capacity) {}
+  // Keeps the step if it is among the K hardest so far.
+  void Offer(long index, const StepReport& report, const StepInputs& inputs) {
+    if (capacity_ <= 0) return;
+    const RecordedOutcome outcome = RecordOutcome(report);
+    const auto position = std::find_if(entries_.begin(), entries_.end(),
+                                       [&](const Entry& e) { return Harder(outcome, e.outcome); });
+    if (position == entries_.end() && static_cast<int>(entries_.size()) >= capacity_) return;
+    entries_.insert(position, Entry{index, outcome, inputs});
+    if (static_cast<int>(entries_.size()) > capacity_) entries_.pop_back();
+  }
+  const std::vector<Entry>& entries() const { return entries_; }
+
+ private:
+  static bool Harder(const RecordedOutcome& a, const RecordedOutcome& b) {
+    if (a.converged != b.converged) return !a.converged;
+    return a.iterations > b.iterations;
+  }
+  int capacity_;
+  std::vector<Entry> entries_;
+};
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (!in) throw std::runtime_error("cannot read scene file '" + path + "'");
+  return text.str();
+}
+
+// Writes the kept steps as DIR/<scenario>_<variant>_step<NNNN>.case and names each file on stderr.
+void DumpWorstSteps(const Case& c, const std::string& urdf, const std::string& scene_name, bool broad_phase,
+                    const StepperOptions& options, const DumpRequest& dump, const WorstSteps& worst) {
+  for (const WorstSteps::Entry& entry : worst.entries()) {
+    char number[32];
+    std::snprintf(number, sizeof(number), "%04ld", entry.index);
+    StepCase step_case;
+    step_case.name = c.scenario + "_" + c.variant + "_step" + number;
+    step_case.origin = dump.command + ": step " + std::to_string(entry.index + 1) + " of the run, from t = " +
+                       FormatNumber(entry.inputs.state.t) + " s";
+    step_case.scene_name = scene_name;
+    step_case.urdf = urdf;
+    step_case.broad_phase = broad_phase;
+    step_case.options = options;
+    step_case.inputs = entry.inputs;
+    step_case.recorded = entry.outcome;
+    const std::string path = dump.dir + "/" + step_case.name + ".case";
+    WriteStepCase(step_case, path);
+    std::cerr << "implicit_sim_bench: wrote " << path << " (" << entry.outcome.iterations << " iterations, "
+              << (entry.outcome.converged ? "converged" : "not converged") << ")\n";
+  }
+}
+
 // Runs one case and prints its JSON line.
-void Run(const Case& c, const std::string& scenes_dir, double max_wall_s) {
-  const Model model = c.scenario == "S1"
-                          ? LoadSceneFromString(MakePileUrdf(c.n, c.shape, c.seed), "s1_" + c.variant)
-                          : LoadSceneFromFile(scenes_dir + "/" + c.scene_file);
+void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const DumpRequest& dump) {
+  const std::string scene_path = scenes_dir + "/" + c.scene_file;
+  const std::string scene_name =  // as LoadSceneFromFile names it: the file name without ".urdf"
+      c.scenario == "S1" ? "s1_" + c.variant : c.scene_file.substr(0, c.scene_file.size() - 5);
+  const std::string urdf = c.scenario == "S1" ? MakePileUrdf(c.n, c.shape, c.seed)
+                           : dump.worst > 0   ? ReadText(scene_path)
+                                              : std::string();
+  const Model model = c.scenario == "S1" ? LoadSceneFromString(urdf, scene_name) : LoadSceneFromFile(scene_path);
   StepperOptions options;
   options.h = c.h;
   Data data(model);
@@ -76,15 +157,21 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s) {
   summary.h = c.h;
   summary.kinetic_energy_initial = KineticEnergy(model, state);
   const long steps = std::lround(c.duration / c.h);
-  double iterations = 0.0;
+  double iterations = 0.0, residual_evaluations = 0.0;
+  WorstSteps worst(dump.worst);
+  StepInputs inputs;  // of the current step, when dumping
   for (long i = 0; i < steps; ++i) {
+    if (dump.worst > 0) CaptureStepInputs(state, data, nullptr, &inputs);
     const StepReport report = Step(model, options, &state, &data);
+    worst.Offer(i, report, inputs);
     if (!report.advanced) break;
     summary.Add(report, data);
     if (metrics.NeedsSamples()) metrics.Observe(SampleOf(model, state, data));
     iterations += report.iterations;
+    residual_evaluations += report.residual_evaluations;
     if (summary.wall_s > max_wall_s) break;
   }
+  DumpWorstSteps(c, urdf, scene_name, data.broad_phase, options, dump, worst);
   summary.kinetic_energy_final = KineticEnergy(model, state);
   const double us = summary.steps > 0 ? 1e6 * summary.wall_s / summary.steps : 0.0;
   const std::vector<std::string> fields = {
@@ -109,6 +196,7 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s) {
       Field("lm_fallbacks", std::to_string(data.lm_fallbacks())),
       Field("max_pairs_in_ncp", std::to_string(summary.max_pairs_in_ncp)),
       Field("mean_iterations", FormatNumber(summary.steps > 0 ? iterations / summary.steps : 0.0)),
+      Field("mean_residual_evaluations", FormatNumber(summary.steps > 0 ? residual_evaluations / summary.steps : 0.0)),
       Field("kinetic_energy_initial", FormatNumber(summary.kinetic_energy_initial)),
       Field("kinetic_energy_final", FormatNumber(summary.kinetic_energy_final)),
   };
@@ -143,12 +231,38 @@ std::vector<Case> AllCases() {
   return cases;
 }
 
+// --dump-worst K (an integer in [1, 10000]) and --dump-dir DIR (an existing directory) go together.
+void ParseDumpRequest(const std::map<std::string, std::string>& values, int argc, char** argv, DumpRequest* dump) {
+  const bool worst = values.count("--dump-worst") > 0, dir = values.count("--dump-dir") > 0;
+  if (worst != dir) throw std::invalid_argument("--dump-worst and --dump-dir go together");
+  if (!worst) return;
+  const std::string& text = values.at("--dump-worst");
+  dump->worst = static_cast<int>(ParseNumber("--dump-worst", text, 1, 10000));
+  if (std::to_string(dump->worst) != text) {
+    throw std::invalid_argument("--dump-worst must be an integer in [1, 10000], got '" + text + "'");
+  }
+  dump->dir = values.at("--dump-dir");
+  std::error_code error;
+  if (!std::filesystem::is_directory(dump->dir, error)) {
+    throw std::invalid_argument("--dump-dir must be an existing directory, got '" + dump->dir + "'");
+  }
+  dump->command = "implicit_sim_bench";
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--dump-worst" || arg == "--dump-dir" || arg == "--scenes-dir") {
+      ++i;  // where the files went is no part of how the steps were made
+      continue;
+    }
+    dump->command += " " + arg;
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const char* usage =
       "usage: implicit_sim_bench [--scenario P1|P2|P3|S1] [--shape sphere|ellipsoid] [--n N] [--seed S] "
-      "[--duration T] [--dt H] [--max-wall S] [--scenes-dir DIR]";
+      "[--duration T] [--dt H] [--max-wall S] [--scenes-dir DIR] [--dump-worst K --dump-dir DIR]";
   std::map<std::string, std::string> values;
   for (int i = 1; i < argc; ++i) {
     if (std::string(argv[i]) == "--variant" && i + 1 < argc) {  // a P case by its variant (AllCases), e.g. p1_ngon100
@@ -157,7 +271,8 @@ int main(int argc, char** argv) {
     }
     const std::string flag = argv[i];
     const bool known = flag == "--scenario" || flag == "--shape" || flag == "--n" || flag == "--seed" ||
-                       flag == "--duration" || flag == "--dt" || flag == "--scenes-dir" || flag == "--max-wall";
+                       flag == "--duration" || flag == "--dt" || flag == "--scenes-dir" || flag == "--max-wall" ||
+                       flag == "--dump-worst" || flag == "--dump-dir";
     if (!known || i + 1 >= argc) {
       std::cerr << "implicit_sim_bench: bad argument '" << flag << "'\n" << usage << "\n";
       return 2;
@@ -167,10 +282,13 @@ int main(int argc, char** argv) {
   const std::string scenes_dir = values.count("--scenes-dir") ? values["--scenes-dir"] : IMPLICIT_SIM_SCENES_DIR;
   std::vector<Case> cases;
   double max_wall_s = 300.0;
+  DumpRequest dump;
   try {
     if (values.count("--max-wall")) max_wall_s = ParseNumber("--max-wall", values["--max-wall"], 1e-3, 1e7);
+    ParseDumpRequest(values, argc, argv, &dump);
     if (!values.count("--scenario")) {
-      if (values.size() > values.count("--scenes-dir") + values.count("--max-wall")) {
+      if (values.size() > values.count("--scenes-dir") + values.count("--max-wall") + values.count("--dump-worst") +
+                              values.count("--dump-dir")) {
         throw std::invalid_argument("--shape, --n, --seed, --duration and --dt need --scenario");
       }
       cases = AllCases();
@@ -219,7 +337,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    for (const Case& c : cases) Run(c, scenes_dir, max_wall_s);
+    for (const Case& c : cases) Run(c, scenes_dir, max_wall_s, dump);
   } catch (const std::exception& e) {
     std::cerr << "implicit_sim_bench: " << e.what() << "\n";
     return 1;

@@ -19,6 +19,7 @@ NcpSummary SolveFromStart(const StepperOptions& options, IslandSolve* island, St
     summary = island->solver().Solve(island->problem, options.newton, &island->z);
   }
   report->iterations += summary.iterations;
+  report->residual_evaluations += summary.residual_evaluations;
   return summary;
 }
 
@@ -43,6 +44,7 @@ class BestAttempt {
 bool NewtonPolish(const StepperOptions& options, IslandSolve* island, StepReport* report, NcpSummary* summary) {
   *summary = island->solver().Solve(island->problem, options.newton, &island->z);
   report->iterations += summary->iterations;
+  report->residual_evaluations += summary->residual_evaluations;
   return summary->converged;
 }
 
@@ -54,6 +56,7 @@ bool SmoothingContinuation(const StepperOptions& options, IslandSolve* island, S
   for (double mu = 1e-2; mu > 1e-9 && island->z.allFinite(); mu *= 0.1) {
     *summary = island->solver().Solve(island->problem, options.newton, &island->z, mu);
     report->iterations += summary->iterations;
+    report->residual_evaluations += summary->residual_evaluations;
   }
   if (!island->z.allFinite()) return false;
   if (NewtonPolish(options, island, report, summary)) return true;
@@ -66,7 +69,9 @@ bool IpoptThenNewton(const StepperOptions& options, IslandSolve* island, StepRep
                      NcpSummary* summary) {
   report->ipopt_solves++;
   island->z = island->z_start;
-  report->iterations += SolveNcpWithIpopt(island->problem, options.IpoptOptions(), &island->z).iterations;
+  const NcpSummary ipopt = SolveNcpWithIpopt(island->problem, options.IpoptOptions(), &island->z);
+  report->iterations += ipopt.iterations;
+  report->residual_evaluations += ipopt.residual_evaluations;
   if (!island->z.allFinite()) return false;
   if (NewtonPolish(options, island, report, summary)) return true;
   best->Offer(*summary, island);

@@ -209,6 +209,7 @@ void MergeReport(const StepReport& island, StepReport* step) {
   step->substeps += island.substeps;
   step->crossings += island.crossings;
   step->iterations += island.iterations;
+  step->residual_evaluations += island.residual_evaluations;
   step->residual = std::max(step->residual, island.residual);
   step->complementarity_error = std::max(step->complementarity_error, island.complementarity_error);
   if (step->fault == StepFault::kNone && island.fault != StepFault::kNone) {

@@ -31,6 +31,7 @@ struct StepReport {
   int islands = 0;              // islands of the (last) solve (step/islands.h)
   int largest_island = 0;       // moving bodies in the largest of them
   int iterations = 0;           // Newton iterations, all attempts
+  int residual_evaluations = 0; // evaluations of Phi by the solvers (Newton's line search included), all attempts
   double residual = 0.0;        // |Phi|_2 of the accepted solution (the largest over sub-steps)
   double complementarity_error = 0.0;
   int active_contacts = 0;      // pairs with normal force > contact_threshold

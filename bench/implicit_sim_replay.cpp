@@ -1,0 +1,161 @@
+// implicit_sim_replay: replays step cases (io/step_case.h, written by implicit_sim_bench --dump-worst) through the
+// stepper alone, one JSON line per case and a summary line (see bench/README.md).
+//   implicit_sim_replay [--repeat R] FILE_OR_DIR...
+// A directory stands for its *.case files, in name order. --repeat R runs each case R times from the same inputs and
+// reports the median wall time. Bad arguments: exit 2 and a one-line message; a case that cannot be read or replayed:
+// exit 1 and a one-line message naming it.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "implicit_sim/core/base/format.h"
+#include "implicit_sim/core/io/step_case.h"
+
+namespace {
+using namespace implicit_sim;
+
+constexpr const char* kUsage = "usage: implicit_sim_replay [--repeat R] FILE_OR_DIR...";
+
+struct Arguments {
+  int repeat = 1;
+  std::vector<std::string> files;  // the cases, in the order given (a directory's in name order)
+};
+
+// The *.case files of a directory, sorted by name.
+std::vector<std::string> CasesIn(const std::string& dir) {
+  std::vector<std::string> files;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    if (entry.is_regular_file() && entry.path().extension() == ".case") files.push_back(entry.path().string());
+  }
+  std::sort(files.begin(), files.end());
+  if (files.empty()) throw std::invalid_argument("directory '" + dir + "' holds no .case file");
+  return files;
+}
+
+Arguments ParseArguments(int argc, char** argv) {
+  Arguments arguments;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--repeat") {
+      const std::string text = i + 1 < argc ? argv[++i] : "";
+      int value = 0;
+      try {
+        value = std::stoi(text);
+      } catch (const std::exception&) {
+        value = 0;
+      }
+      if (std::to_string(value) != text || value < 1 || value > 1000) {
+        throw std::invalid_argument("--repeat must be an integer in [1, 1000], got '" + text + "'");
+      }
+      arguments.repeat = value;
+    } else if (arg.rfind("--", 0) == 0) {
+      throw std::invalid_argument("unknown flag '" + arg + "'");
+    } else if (std::filesystem::is_directory(arg)) {
+      for (const std::string& file : CasesIn(arg)) arguments.files.push_back(file);
+    } else if (std::filesystem::is_regular_file(arg)) {
+      arguments.files.push_back(arg);
+    } else {
+      throw std::invalid_argument("'" + arg + "' is neither a file nor a directory");
+    }
+  }
+  if (arguments.files.empty()) throw std::invalid_argument("no step case given");
+  return arguments;
+}
+
+std::string Quoted(const std::string& text) {
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string Json(double value) { return std::isfinite(value) ? FormatNumber(value) : "null"; }
+std::string Json(bool value) { return value ? "true" : "false"; }
+
+struct Totals {
+  int cases = 0, failures = 0, not_same = 0;
+  long iterations = 0, residual_evaluations = 0;
+  double wall_us = 0.0;
+};
+
+double Median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+// Replays one case `repeat` times and prints its line.
+void ReplayOne(const std::string& path, int repeat, Totals* totals) {
+  const StepCase step_case = ReadStepCase(path);  // its errors name the path
+  StepReport report;
+  std::vector<double> wall_us;
+  bool repeatable = true;  // every repeat did what the first did
+  int bodies = 0;
+  try {
+    const Model model = LoadStepCaseModel(step_case);
+    bodies = model.num_moving();
+    State end_state;
+    for (int r = 0; r < repeat; ++r) {
+      const StepReport again = ReplayStepCase(model, step_case, &end_state);
+      if (r == 0) report = again;
+      repeatable = repeatable && again.iterations == report.iterations && again.converged == report.converged;
+      wall_us.push_back(1e6 * again.wall_time_s);
+    }
+  } catch (const std::exception& e) {
+    throw std::runtime_error(path + ": " + e.what());
+  }
+  const RecordedOutcome& recorded = step_case.recorded;
+  const bool same = report.converged == recorded.converged && report.iterations == recorded.iterations &&
+                    report.residual_evaluations == recorded.residual_evaluations;
+  const double median_us = Median(wall_us);
+  std::cout << "{\"case\": " << Quoted(step_case.name) << ", \"bodies\": " << bodies
+            << ", \"pairs_in_ncp\": " << report.pairs_in_ncp << ", \"converged\": " << Json(report.converged)
+            << ", \"fault\": " << Quoted(StepFaultName(report.fault)) << ", \"iterations\": " << report.iterations
+            << ", \"residual_evaluations\": " << report.residual_evaluations << ", \"rung\": "
+            << Quoted(HighestRung(report, step_case.inputs.warm_start.valid))
+            << ", \"cold_restarts\": " << report.cold_restarts << ", \"smoothed_solves\": " << report.smoothed_solves
+            << ", \"ipopt_solves\": " << report.ipopt_solves << ", \"substeps\": " << report.substeps
+            << ", \"crossings\": " << report.crossings << ", \"residual\": " << Json(report.residual)
+            << ", \"wall_us\": " << Json(median_us) << ", \"repeats\": " << repeat
+            << ", \"repeatable\": " << Json(repeatable) << ", \"recorded_iterations\": " << recorded.iterations
+            << ", \"recorded_converged\": " << Json(recorded.converged) << ", \"same_as_recorded\": " << Json(same)
+            << "}" << std::endl;
+  totals->cases++;
+  totals->failures += !report.converged;
+  totals->not_same += !same;
+  totals->iterations += report.iterations;
+  totals->residual_evaluations += report.residual_evaluations;
+  totals->wall_us += median_us;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Arguments arguments;
+  try {
+    arguments = ParseArguments(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "implicit_sim_replay: " << e.what() << "; " << kUsage << "\n";
+    return 2;
+  }
+  Totals totals;
+  for (const std::string& path : arguments.files) {
+    try {
+      ReplayOne(path, arguments.repeat, &totals);
+    } catch (const std::exception& e) {
+      std::cerr << "implicit_sim_replay: " << e.what() << "\n";
+      return 1;
+    }
+  }
+  std::cout << "{\"summary\": true, \"cases\": " << totals.cases << ", \"total_iterations\": " << totals.iterations
+            << ", \"total_residual_evaluations\": " << totals.residual_evaluations
+            << ", \"failures\": " << totals.failures << ", \"total_wall_us\": " << Json(totals.wall_us)
+            << ", \"not_same_as_recorded\": " << totals.not_same << "}" << std::endl;
+  return 0;
+}
