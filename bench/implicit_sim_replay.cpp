@@ -1,8 +1,9 @@
 // implicit_sim_replay: replays step cases (io/step_case.h, written by implicit_sim_bench --dump-worst) through the
 // stepper alone, one JSON line per case and a summary line (see bench/README.md).
-//   implicit_sim_replay [--repeat R] FILE_OR_DIR...
+//   implicit_sim_replay [--repeat R] [--set FIELD=VALUE]... FILE_OR_DIR...
 // A directory stands for its *.case files, in name order. --repeat R runs each case R times from the same inputs and
-// reports the median wall time. Bad arguments: exit 2 and a one-line message; a case that cannot be read or replayed:
+// reports the median wall time. --set overrides an option of every case (a field of the options table,
+// step/options.h, e.g. newton.line_search_memory=10): the ablations of bench/README.md. Bad arguments: exit 2 and a one-line message; a case that cannot be read or replayed:
 // exit 1 and a one-line message naming it.
 #include <algorithm>
 #include <cmath>
@@ -10,18 +11,21 @@
 #include <iostream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "implicit_sim/core/base/format.h"
 #include "implicit_sim/core/io/step_case.h"
+#include "implicit_sim/core/step/options.h"
 
 namespace {
 using namespace implicit_sim;
 
-constexpr const char* kUsage = "usage: implicit_sim_replay [--repeat R] FILE_OR_DIR...";
+constexpr const char* kUsage = "usage: implicit_sim_replay [--repeat R] [--set FIELD=VALUE]... FILE_OR_DIR...";
 
 struct Arguments {
   int repeat = 1;
+  std::vector<std::pair<const OptionRow*, double>> overrides;  // --set
   std::vector<std::string> files;  // the cases, in the order given (a directory's in name order)
 };
 
@@ -52,6 +56,17 @@ Arguments ParseArguments(int argc, char** argv) {
         throw std::invalid_argument("--repeat must be an integer in [1, 1000], got '" + text + "'");
       }
       arguments.repeat = value;
+    } else if (arg == "--set") {
+      const std::string text = i + 1 < argc ? argv[++i] : "";
+      const size_t eq = text.find('=');
+      const OptionRow* row = eq == std::string::npos ? nullptr : FindOptionByField(text.substr(0, eq));
+      if (!row) throw std::invalid_argument("--set takes FIELD=VALUE with a field of the options table, got '" + text + "'");
+      double value = 0.0;
+      std::string error;
+      if (!ParseOptionValue(*row, text.substr(eq + 1), "--set " + text.substr(0, eq), &value, &error)) {
+        throw std::invalid_argument(error);
+      }
+      arguments.overrides.emplace_back(row, value);
     } else if (arg.rfind("--", 0) == 0) {
       throw std::invalid_argument("unknown flag '" + arg + "'");
     } else if (std::filesystem::is_directory(arg)) {
@@ -91,8 +106,10 @@ double Median(std::vector<double> values) {
 }
 
 // Replays one case `repeat` times and prints its line.
-void ReplayOne(const std::string& path, int repeat, Totals* totals) {
-  const StepCase step_case = ReadStepCase(path);  // its errors name the path
+void ReplayOne(const std::string& path, const Arguments& arguments, Totals* totals) {
+  const int repeat = arguments.repeat;
+  StepCase step_case = ReadStepCase(path);  // its errors name the path
+  for (const auto& [row, value] : arguments.overrides) row->set(&step_case.options, value);
   StepReport report;
   std::vector<double> wall_us;
   bool repeatable = true;  // every repeat did what the first did
@@ -147,7 +164,7 @@ int main(int argc, char** argv) {
   Totals totals;
   for (const std::string& path : arguments.files) {
     try {
-      ReplayOne(path, arguments.repeat, &totals);
+      ReplayOne(path, arguments, &totals);
     } catch (const std::exception& e) {
       std::cerr << "implicit_sim_replay: " << e.what() << "\n";
       return 1;
