@@ -115,7 +115,13 @@ void SimNode::ResetLocked() {
   time_offset_ = SimTime();  // simulation time keeps increasing; bodies return to their initial state
   state_ = initial_state_;
   ClearWarmStart(&data_);
-  data_.contacts.clear();
+  // No forces, but the vector keeps its size: it follows the core's pair layout (Data::LayOut), and a step whose
+  // layout is unchanged writes its results into it by index (clearing it made them vanish after ~reset).
+  for (ContactResult& contact : data_.contacts) {
+    const int pair = contact.pair;
+    contact = ContactResult();
+    contact.pair = pair;
+  }
   wrenches_.clear();
   commanded_W_.setZero();
   joint_efforts_.setZero();
