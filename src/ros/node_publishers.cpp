@@ -3,10 +3,10 @@
 #include "implicit_sim/ros/sim_node.h"  // first: its generated service type Step precedes the core's function Step
 
 #include <algorithm>
-#include <chrono>
 #include <string>
 
 #include <rosgraph_msgs/Clock.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include "implicit_sim/BodyStates.h"
 #include "implicit_sim/Contacts.h"
@@ -17,8 +17,6 @@
 namespace implicit_sim {
 namespace conv = ros_conversions;
 namespace {
-
-using WallClock = std::chrono::steady_clock;
 
 // The effort the core applies for a command: clamped to the URDF effort limit, plus the scene's constant effort.
 double AppliedEffort(const Joint& joint, double commanded) {
@@ -32,6 +30,9 @@ bool HaveContacts(const State& snapshot) { return snapshot.t > 0.0; }
 
 void SimNode::AdvertiseTopics() {
   clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  // Latched: a subscriber that connects late (rviz started while paused) gets the last transforms at once, since
+  // /tf is never republished with a stamp it already carried (tf2 would warn TF_REPEATED_DATA).
+  tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", 100, true);
   contacts_pub_ = pnh_.advertise<implicit_sim::Contacts>("contacts", 10);
   markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("markers", 10);
   stats_pub_ = pnh_.advertise<implicit_sim::StepStats>("step_stats", 100);
@@ -41,10 +42,9 @@ void SimNode::AdvertiseTopics() {
 
 void SimNode::PublishClock(double sim_time) {
   std::lock_guard<std::mutex> lock(clock_mutex_);
-  if (sim_time < last_clock_) return;  // /clock never goes backwards
-  last_clock_ = sim_time;
+  last_clock_ = std::max(last_clock_, sim_time);  // /clock never goes backwards; the same time again is allowed
   rosgraph_msgs::Clock msg;
-  msg.clock.fromSec(sim_time);
+  msg.clock.fromSec(last_clock_);
   clock_pub_.publish(msg);
 }
 
@@ -59,16 +59,13 @@ void SimNode::PublishStaticTf() {
 }
 
 void SimNode::PublishTf(const Snapshot& snapshot, const ros::Time& stamp, PublishMemory* memory) {
-  // /tf only when time has moved (tf2 listeners warn about repeated stamps), and every 5 s while paused so that
-  // late subscribers get the poses.
-  const bool moved = snapshot.sim_time != memory->last_tf_time ||
-                     WallClock::now() - memory->last_tf_wall >= std::chrono::seconds(5);
-  if (!moved) return;
+  // /tf only when time has moved: tf2 listeners warn about (and drop) a repeated stamp. Late subscribers get the last
+  // message from the latched publisher.
+  if (snapshot.sim_time <= memory->last_tf_time) return;
   memory->last_tf_time = snapshot.sim_time;
-  memory->last_tf_wall = WallClock::now();
-  const std::vector<geometry_msgs::TransformStamped> transforms =
-      conv::ToLinkTransforms(model_, snapshot.state, memory->on_tf, stamp, params_.world_frame);
-  if (!transforms.empty()) tf_broadcaster_.sendTransform(transforms);  // one batched /tf message
+  tf2_msgs::TFMessage msg;
+  msg.transforms = conv::ToLinkTransforms(model_, snapshot.state, memory->on_tf, stamp, params_.world_frame);
+  if (!msg.transforms.empty()) tf_pub_.publish(msg);  // one batched /tf message
 }
 
 void SimNode::PublishJointStates(const State& snapshot, const Eigen::VectorXd& efforts, const ros::Time& stamp) {
@@ -118,12 +115,6 @@ void SimNode::PublishMarkers(const Snapshot& snapshot, const ros::Time& stamp, P
   }
   memory->shown_pairs.swap(active);
   markers_pub_.publish(msg);
-}
-
-void SimNode::PublishDiagnostics(PublishMemory* memory) {
-  if (WallClock::now() - memory->last_diagnostics < std::chrono::seconds(1)) return;
-  diagnostics_.force_update();
-  memory->last_diagnostics = WallClock::now();
 }
 
 void SimNode::UpdateDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) {

@@ -109,7 +109,7 @@ bool SimNode::OnStep(implicit_sim::Step::Request& req, implicit_sim::Step::Respo
       return true;
     }
     uint32_t done = 0;
-    for (; done < req.steps && !shutdown_; ++done) {
+    for (; done < req.steps && !stopping_; ++done) {
       StepLocked();
       if (!last_report_.advanced) break;
     }
@@ -140,7 +140,10 @@ bool SimNode::OnSetBodyState(implicit_sim::SetBodyState::Request& req, implicit_
   std::string error;
   const int b = FindBodyOrFail(req.state.name, true, &error);
   res.success = b >= 0 && conv::SetBodyStateFromMsg(model_, b, req.state, &state_, &error);
-  if (res.success) ClearWarmStart(&data_);  // the next step starts cold from the new configuration
+  if (res.success) {
+    ClearWarmStart(&data_);  // the next step starts cold from the new configuration
+    SaveLatestLocked();
+  }
   res.message = res.success ? "set '" + req.state.name + "'" : error;
   return true;
 }
@@ -214,6 +217,7 @@ bool SimNode::SetJointEffortsLocked(const std::vector<std::string>& names, const
     }
   }
   for (size_t i = 0; i < names.size(); ++i) joint_efforts_[joints[i]] = efforts[i];
+  SaveLatestLocked();  // /joint_states shows the new efforts
   return true;
 }
 

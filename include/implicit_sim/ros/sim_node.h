@@ -1,12 +1,16 @@
 // The ROS node over the core: steps on its own thread, publishes /clock, /tf, /tf_static, ~contacts, ~markers,
-// ~step_stats, ~body_states and /diagnostics, and serves a gazebo_ros-like control API. doc/ros_node.md documents the
+// ~step_stats, ~body_states and /diagnostics, and serves a gazebo_ros-like control API. Three threads: physics (steps,
+// holding mutex_ for the whole step), publish (/clock, /tf and the topics at ~publish_rate from the latest completed
+// step, never taking mutex_, so a slow step never delays them) and diagnostics (once a second). doc/ros_node.md documents the
 // contract (topics, services, parameters). By concern: sim_node.cpp (construction, threads, stepping),
 // node_params.cpp (parameters), node_services.cpp (services and command topics, joints included) and
 // node_publishers.cpp (topics and diagnostics).
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -18,7 +22,6 @@
 #include <ros/ros.h>
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/static_transform_broadcaster.h>
-#include <tf2_ros/transform_broadcaster.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include "implicit_sim/ApplyBodyWrench.h"
@@ -53,7 +56,8 @@ class SimNode {
     double start, end;   // simulation time (s); end < 0: until cleared
   };
 
-  // What the publish thread copies out under the mutex, once per cycle.
+  // The latest completed state, saved under mutex_ whenever the state changes (every step, reset, set_body_state,
+  // joint efforts) and read by the publish thread under latest_mutex_ only.
   struct Snapshot {
     State state;
     std::vector<ContactResult> contacts;
@@ -66,7 +70,6 @@ class SimNode {
     std::vector<char> on_tf;                 // per body: whether /tf carries its link
     std::vector<int> shown_pairs, active_pairs;  // pairs with contact markers: last published, current
     double last_tf_time = -1.0;              // s, simulation time of the last /tf
-    std::chrono::steady_clock::time_point last_tf_wall, last_diagnostics;
   };
 
   double SimTime() const { return time_offset_ + state_.t; }
@@ -74,9 +77,15 @@ class SimNode {
   void StepLocked();                 // one step with the active wrenches; mutex held
   void ResetLocked();                // bodies back to the initial state, warm start and wrenches cleared; mutex held
   void ComputeWrenchesLocked();      // fills wrench_W_ for the step starting now
+  void SaveLatestLocked();           // the current state as the latest snapshot; mutex held
+  std::shared_ptr<const Snapshot> Latest() const;
   void PhysicsLoop();
   void PublishLoop();
-  bool TakeSnapshot(Snapshot* snapshot);  // false once shutting down
+  void DiagnosticsLoop();
+  // Sets stopping_, wakes every thread and joins them once all have ended within grace_s (s); false,
+  // nothing joined, when one is still inside a step (or waiting for it) by then.
+  bool StopThreads(double grace_s);
+  void StartThread(std::thread* thread, void (SimNode::*loop)());
   // node_publishers.cpp: one function per topic.
   void AdvertiseTopics();
   void PublishClock(double sim_time);
@@ -87,7 +96,6 @@ class SimNode {
   void PublishContacts(const Snapshot& snapshot, const ros::Time& stamp);
   void PublishMarkers(const Snapshot& snapshot, const ros::Time& stamp, PublishMemory* memory);
   void PublishJointStates(const State& snapshot, const Eigen::VectorXd& efforts, const ros::Time& stamp);
-  void PublishDiagnostics(PublishMemory* memory);  // at most once a second
   void UpdateDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status);
   // node_services.cpp: services and command topics.
   void AdvertiseServices();
@@ -118,7 +126,7 @@ class SimNode {
   State state_, initial_state_;
   Data data_;
   double time_offset_ = 0.0;      // simulation time = time_offset_ + state_.t (reset keeps time monotonic)
-  bool paused_ = false, shutdown_ = false, restart_pacing_ = true;
+  bool paused_ = false, restart_pacing_ = true;
   uint64_t step_count_ = 0;
   StepReport last_report_;
   std::vector<TimedWrench> wrenches_;
@@ -136,13 +144,22 @@ class SimNode {
   std::mutex clock_mutex_;
   double last_clock_ = -1.0;
 
-  ros::Publisher clock_pub_, contacts_pub_, markers_pub_, stats_pub_, body_states_pub_, joint_states_pub_;
+  mutable std::mutex latest_mutex_;
+  std::shared_ptr<const Snapshot> latest_;  // guarded by latest_mutex_
+
+  // Every thread ends: the physics thread after the step in progress (StopThreads does not take mutex_, which a
+  // step holds), the others at once.
+  std::atomic<bool> stopping_{false};
+  std::mutex stop_mutex_;
+  std::condition_variable stop_cv_;    // wakes the publish and diagnostics threads' waits, and StopThreads
+  int threads_started_ = 0, threads_ended_ = 0;  // guarded by stop_mutex_
+
+  ros::Publisher clock_pub_, tf_pub_, contacts_pub_, markers_pub_, stats_pub_, body_states_pub_, joint_states_pub_;
   std::vector<ros::ServiceServer> services_;
   ros::Subscriber wrench_sub_, joint_effort_sub_;
-  tf2_ros::TransformBroadcaster tf_broadcaster_;
   tf2_ros::StaticTransformBroadcaster static_broadcaster_;
   diagnostic_updater::Updater diagnostics_;
-  std::thread physics_thread_, publish_thread_;
+  std::thread physics_thread_, publish_thread_, diagnostics_thread_;
 };
 
 }  // namespace implicit_sim
