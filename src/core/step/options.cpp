@@ -44,7 +44,7 @@ constexpr std::array<OptionRow, kNumOptionRows> kTable{{
      "regularization delta of the sparse Newton solve",
      [](const Options& o) { return o.newton.sparse_regularization; },
      [](Options* o, double x) { o->newton.sparse_regularization = x; }},
-    {"newton.line_search_memory", "", "", OptionKind::kInteger, 1.0, 1.0, 16.0, false, false, "", nullptr,
+    {"newton.line_search_memory", "", "", OptionKind::kInteger, 10.0, 1.0, 16.0, false, false, "", nullptr,
      "the Newton line search accepts a decrease of the largest of the last this many merits (1: monotone)",
      [](const Options& o) { return static_cast<double>(o.newton.line_search_memory); },
      [](Options* o, double x) { o->newton.line_search_memory = static_cast<int>(x); }},

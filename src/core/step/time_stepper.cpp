@@ -237,6 +237,7 @@ bool SolveIslands(const Model& model, const StepperOptions& options, const Eigen
   }
   bool advanced = true;
   report->islands = data->num_islands;
+  data->contacts.resize(data->problem.blocks().size());  // one per pair in the NCP, whatever a caller left in it
   for (int i = 0; i < data->num_islands; ++i) {
     const IslandSolve& island = *data->islands[i];
     MergeReport(island.report, report);

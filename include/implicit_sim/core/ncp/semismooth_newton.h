@@ -31,7 +31,7 @@ struct NewtonOptions {
   double min_step = 1e-10;        // smallest line-search step length
   double sparse_regularization = 1e-9;  // delta (see above)
   // The line search accepts a step that decreases the largest of the last this many merits (1: monotone), [1, 16].
-  int line_search_memory = 1;
+  int line_search_memory = 10;
   // The allowed ranges are those of the step's options table (step/options.h), which validates these fields.
 };
 
