@@ -8,6 +8,10 @@
 namespace implicit_sim {
 namespace {
 
+// Above this many unknowns (an island of a pile) the Ipopt rung costs seconds to tens of seconds on its limited-memory
+// Hessian, and halving the step is cheaper: such islands try Ipopt only as a last chance, in the shortest sub-step.
+constexpr int kIpoptFirstSizeLimit = 600;
+
 // The primary solver from island->z_start; the solution goes to island->z.
 NcpSummary SolveFromStart(const StepperOptions& options, IslandSolve* island, StepReport* report) {
   island->z = island->z_start;
@@ -81,7 +85,7 @@ bool IpoptThenNewton(const StepperOptions& options, IslandSolve* island, StepRep
 }  // namespace
 
 NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& options, const State& state, IslandSolve* island,
-                                StepReport* report) {
+                                bool last_chance, StepReport* report) {
   StepProblem& problem = island->problem;
   if (!island->has_warm_start) {
     SeedColdStart(model, state, &problem, &island->z_start);
@@ -110,7 +114,10 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
   island->z_start = island->z_best;
   NcpSummary summary;
   if (SmoothingContinuation(options, island, report, &best, &summary)) return summary;
-  if (IpoptThenNewton(options, island, report, &best, &summary)) return summary;
+  if ((last_chance || problem.size() <= kIpoptFirstSizeLimit) &&
+      IpoptThenNewton(options, island, report, &best, &summary)) {
+    return summary;
+  }
   island->z = island->z_best;
   return best.summary();
 }

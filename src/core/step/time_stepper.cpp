@@ -148,13 +148,14 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
   backup = island->z;
   const bool had_warm_start = island->has_warm_start;
   problem.BeginStep(*state, h, in.wrench);
-  NcpSummary result = SolveWithRetryLadder(model, options, *state, island, report);
+  const bool last_chance = depth == Data::kMaxSubstepDepth;
+  NcpSummary result = SolveWithRetryLadder(model, options, *state, island, last_chance, report);
   // A solution in which a body passed through another is no solution of the step (tunnelling): solve again from a
   // cold start (the start-of-step closest points, on the near side), and if it still crosses, split the step.
   bool crossed = island->z.allFinite() && FindCrossing(model, *state, problem, island->z, nullptr) >= 0;
   if (crossed && island->has_warm_start) {
     island->has_warm_start = false;
-    result = SolveWithRetryLadder(model, options, *state, island, report);
+    result = SolveWithRetryLadder(model, options, *state, island, last_chance, report);
     crossed = island->z.allFinite() && FindCrossing(model, *state, problem, island->z, nullptr) >= 0;
   }
   if (crossed) {

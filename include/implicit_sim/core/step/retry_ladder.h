@@ -19,8 +19,10 @@ namespace implicit_sim {
 
 // Solves the step NCP of an island (island->problem: BeginStep called for `state`, its pairs laid out) from its warm
 // start if it has one and leaves the best solution in island->z (and its tangent axes in the problem); does not touch
-// the state. Counts the rungs and iterations in *report. The summary is that of the accepted solve.
+// the state. Counts the rungs and iterations in *report. The summary is that of the accepted solve. The Ipopt rung is
+// tried by problems of up to 600 unknowns, and by larger ones when `last_chance` (the shortest sub-step): above that
+// size it costs seconds and halving the step first is cheaper.
 NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& options, const State& state,
-                                IslandSolve* island, StepReport* report);
+                                IslandSolve* island, bool last_chance, StepReport* report);
 
 }  // namespace implicit_sim
