@@ -2,6 +2,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -14,6 +15,23 @@
 
 namespace implicit_sim {
 namespace testing_support {
+
+// FNV-1a over the bytes of t, q, v and every contact's normal force and gap: equal hashes mean equal bits.
+inline uint64_t HashStep(const State& state, const Data& data) {
+  uint64_t hash = 1469598103934665603ull;
+  auto add = [&hash](const double* values, long count) {
+    const auto* bytes = reinterpret_cast<const unsigned char*>(values);
+    for (long i = 0; i < count * static_cast<long>(sizeof(double)); ++i) hash = (hash ^ bytes[i]) * 1099511628211ull;
+  };
+  add(&state.t, 1);
+  add(state.q.data(), state.q.size());
+  add(state.v.data(), state.v.size());
+  for (const ContactResult& c : data.contacts) {
+    add(&c.normal_force, 1);
+    add(&c.gap, 1);
+  }
+  return hash;
+}
 
 inline std::string ScenePath(const std::string& file) {
   return std::string(IMPLICIT_SIM_SOURCE_DIR) + "/scenes/" + file;

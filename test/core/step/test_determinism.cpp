@@ -13,28 +13,11 @@
 namespace implicit_sim {
 namespace {
 
-// FNV-1a over the bytes of t, q, v and every contact's normal force and gap: equal hashes mean equal bits.
-uint64_t HashStep(const State& state, const Data& data) {
-  uint64_t hash = 1469598103934665603ull;
-  auto add = [&hash](const double* values, long count) {
-    const auto* bytes = reinterpret_cast<const unsigned char*>(values);
-    for (long i = 0; i < count * static_cast<long>(sizeof(double)); ++i) hash = (hash ^ bytes[i]) * 1099511628211ull;
-  };
-  add(&state.t, 1);
-  add(state.q.data(), state.q.size());
-  add(state.v.data(), state.v.size());
-  for (const ContactResult& c : data.contacts) {
-    add(&c.normal_force, 1);
-    add(&c.gap, 1);
-  }
-  return hash;
-}
-
 std::vector<uint64_t> RunHashed(const Model& model, const StepperOptions& options, int steps, State* state, Data* data) {
   std::vector<uint64_t> hashes;
   for (int i = 0; i < steps; ++i) {
     Step(model, options, state, data);
-    hashes.push_back(HashStep(*state, *data));
+    hashes.push_back(testing_support::HashStep(*state, *data));
   }
   return hashes;
 }

@@ -72,23 +72,6 @@ TEST(Islands, PartsFallingSideBySideAreSeparateIslands) {
   EXPECT_EQ(report.pairs_in_ncp, 0);
 }
 
-// FNV-1a over t, q, v and the contacts' normal forces and gaps.
-uint64_t HashStep(const State& state, const Data& data) {
-  uint64_t hash = 1469598103934665603ull;
-  auto add = [&hash](const double* values, long count) {
-    const auto* bytes = reinterpret_cast<const unsigned char*>(values);
-    for (long i = 0; i < count * static_cast<long>(sizeof(double)); ++i) hash = (hash ^ bytes[i]) * 1099511628211ull;
-  };
-  add(&state.t, 1);
-  add(state.q.data(), state.q.size());
-  add(state.v.data(), state.v.size());
-  for (const ContactResult& c : data.contacts) {
-    add(&c.normal_force, 1);
-    add(&c.gap, 1);
-  }
-  return hash;
-}
-
 TEST(Islands, ResultsAreBitIdenticalForAnyNumberOfThreads) {
   // A pile of 20 spheres landing: islands form, merge and split; some steps climb the retry ladder.
   const Model model = LoadSceneFromString(MakePileUrdf(20, PileShape::kSphere), "pile");
@@ -106,7 +89,7 @@ TEST(Islands, ResultsAreBitIdenticalForAnyNumberOfThreads) {
       ASSERT_TRUE(report.advanced) << report.fault_detail;
       most_islands = std::max(most_islands, report.islands);
       largest = std::max(largest, report.largest_island);
-      hashes.push_back(HashStep(state, data));
+      hashes.push_back(testing_support::HashStep(state, data));
     }
     runs.push_back(hashes);
   }
