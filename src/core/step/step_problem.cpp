@@ -405,7 +405,14 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
   // without touching. The LM step of the dense solver copes; for the sparse LU the rows use sigma + max(d, 0) / h in
   // place of sigma (set_regular_separated_friction), which fixes s at a separated contact and is exactly the paper's
   // row at a touching one (d = 0).
-  const double sigma_eff = regular_separated_friction_ ? sigma + std::max(d, 0.0) / h_ : sigma;
+  // The rows take the slip speed as max(sigma, 0), equal at every solution (sigma >= 0): a negative iterate would
+  // make friction push along the slip (the wrong branch, between which and the right one Newton then alternates) or,
+  // at sigma = -d / h, leave s undetermined.
+  // (The raw rows keep sigma: Ipopt bounds it below by 0.)
+  const bool clamp = !eval_.mode.raw && sigma < 0.0;
+  const double slip = clamp ? 0.0 : sigma;
+  const double dslip_dsigma = clamp ? 0.0 : 1.0;
+  const double sigma_eff = regular_separated_friction_ ? slip + std::max(d, 0.0) / h_ : slip;
   const double dsigma_dd = regular_separated_friction_ && d > 0.0 ? 1.0 / h_ : 0.0;
   const int rt = off + 10, ro = off + 11, rr = off + 12;
   (*Phi)[rt] = fr.e_t * t.dot(v_rel) + st * sigma_eff;
@@ -423,9 +430,9 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
     add1(rt, off + pi::kSt, sigma_eff + eval_.mode.regularization);
     add1(ro, off + pi::kSo, sigma_eff + eval_.mode.regularization);
     add1(rr, off + pi::kSr, sigma_eff + eval_.mode.regularization);
-    add1(rt, blk.sigma(), st);
-    add1(ro, blk.sigma(), so);
-    add1(rr, blk.sigma(), sr);
+    add1(rt, blk.sigma(), st * dslip_dsigma);
+    add1(ro, blk.sigma(), so * dslip_dsigma);
+    add1(rr, blk.sigma(), sr * dslip_dsigma);
     add1(rt, off + pi::kD, st * dsigma_dd);
     add1(ro, off + pi::kD, so * dsigma_dd);
     add1(rr, off + pi::kD, sr * dsigma_dd);

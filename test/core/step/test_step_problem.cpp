@@ -93,6 +93,32 @@ TEST(StepProblemJacobian, SparseAssemblyWithSeparatedFrictionRows) {
   ExpectJacobianMatchesFiniteDifferences(test_models::PrismOnGround(7), 7, true);
 }
 
+// The friction rows take the slip speed as max(sigma, 0) (a negative iterate would make friction push along the slip);
+// the raw rows, which Ipopt and the independent NCP check read, keep sigma itself.
+TEST(StepProblem, FrictionRowsClampANegativeSlipSpeedButRawRowsDoNot) {
+  const Model model = test_models::SphereOnTwoSpheres();
+  StepProblem problem(model);
+  problem.BeginStep(State::Initial(model), 0.01, nullptr);
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::VectorXd z(problem.size());
+  for (int i = 0; i < z.size(); ++i) z[i] = u(rng);
+  problem.ResetTangentAxes(z);
+  const PairBlock& blk = problem.blocks()[0];
+  const int friction_row = blk.offset + pair_index::kSt;
+  Eigen::VectorXd at_zero = z, negative = z, Phi_zero, Phi_negative;
+  at_zero[blk.sigma()] = 0.0;
+  negative[blk.sigma()] = -0.3;
+  problem.Evaluate(at_zero, NcpEvalMode(), &Phi_zero, nullptr);
+  problem.Evaluate(negative, NcpEvalMode(), &Phi_negative, nullptr);
+  EXPECT_EQ(Phi_zero[friction_row], Phi_negative[friction_row]);
+  NcpEvalMode raw;
+  raw.raw = true;
+  problem.Evaluate(at_zero, raw, &Phi_zero, nullptr);
+  problem.Evaluate(negative, raw, &Phi_negative, nullptr);
+  EXPECT_NEAR(Phi_negative[friction_row] - Phi_zero[friction_row], -0.3 * z[friction_row], 1e-12);
+}
+
 TEST(StepProblem, LayoutCountsUnknownsAndRowsOfEveryPair) {
   const Model model = test_models::BoxAndSuperellipsoid();
   StepProblem problem(model);
