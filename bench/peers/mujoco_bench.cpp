@@ -124,7 +124,9 @@ std::unique_ptr<MujocoScene> LoadScene(const Case& c, const std::string& scenes_
   options.solver = solver.empty() ? (c.scenario == "S1" ? "CG" : "Newton") : solver;
   if (c.scenario == "S1") {  // room for every contact of the pile (4 constraint rows each at condim 4)
     options.max_contacts = 8 * c.n + 50;
-    options.max_constraint_rows = std::min(4 * options.max_contacts, 10000);  // 2.2.2: mjData must stay < 2 GiB
+    // 2.2.2: mjData must stay < 2 GiB, and its stack (a heuristic growing with njmax x nv) must fit: at N = 1000
+    // (nv = 6000) mj_makeData fails with 10 000 rows and works with 8000 (measured 2026-12-02).
+    options.max_constraint_rows = std::min(4 * options.max_contacts, c.n <= 500 ? 10000 : 8000);
   }
   s->m = CompileMjcf(MjcfFromModel(s->model, options));
   s->d = mj_makeData(s->m);

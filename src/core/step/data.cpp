@@ -6,7 +6,7 @@
 namespace implicit_sim {
 
 IslandSolve::IslandSolve(const Model& model)
-    : problem(model, /*all_pairs=*/false), dense_solver(0, false), sparse_solver(0, true),
+    : problem(model, /*all_pairs=*/false, /*all_bodies=*/false), dense_solver(0, false), sparse_solver(0, true),
       z_backup(Data::kMaxSubstepDepth + 1) {
   problem.set_regular_separated_friction(true);  // keeps the Newton matrix regular at separated pairs
 }

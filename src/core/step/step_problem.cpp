@@ -10,7 +10,7 @@
 
 namespace implicit_sim {
 namespace pi = pair_index;
-StepProblem::StepProblem(const Model& model, bool all_pairs)
+StepProblem::StepProblem(const Model& model, bool all_pairs, bool all_bodies)
     : model_(model), model_force_scale_(model.ForceScale()), force_scale_(model_force_scale_) {
   joint_equality_start_.resize(model.joints.size());
   joint_position_start_.resize(model.joints.size());
@@ -19,12 +19,12 @@ StepProblem::StepProblem(const Model& model, bool all_pairs)
   for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
     if (model.velocity_slot[b] < 0) fixed_bodies_.push_back(b);
   }
-  std::vector<int> slots(model.num_moving()), joints(model.joints.size());
-  for (int k = 0; k < model.num_moving(); ++k) slots[k] = k;
+  std::vector<int> slots(all_bodies ? model.num_moving() : 0), joints(all_bodies ? model.joints.size() : 0);
+  for (size_t k = 0; k < slots.size(); ++k) slots[k] = static_cast<int>(k);
   for (size_t j = 0; j < joints.size(); ++j) joints[j] = static_cast<int>(j);
   SetBodies(slots, joints);
   std::vector<int> pairs;
-  for (int c = 0; all_pairs && c < static_cast<int>(model.pairs.size()); ++c) pairs.push_back(c);
+  for (int c = 0; all_bodies && all_pairs && c < static_cast<int>(model.pairs.size()); ++c) pairs.push_back(c);
   std::vector<int> new_blocks;
   Eigen::VectorXd z;
   SetActivePairs(pairs, nullptr, &z, &new_blocks);

@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
@@ -118,6 +119,62 @@ TEST(RunnerCli, RefusesBadArgumentsAndWritesNothing) {
   EXPECT_EQ(RunRunner("--scene " + scene + " --duration 1 --out " + out + " --max-iterations 2.5"), 2);
   EXPECT_EQ(RunRunner("--scene " + scene + " --duration 1 --out " + out + " --solver path"), 2);
   EXPECT_FALSE(Exists(out));
+}
+
+// scripts/scaling_curve (bench/README.md#cost-against-n) from a raw JSONL it did not measure (--replot): the medians,
+// the least-squares exponents over N = 100..1000 (a point stopped by --max-wall left out), the verdict against the
+// N^1.3 bar, a PNG with content; bad arguments exit 2. No benchmark runs, nothing is timed.
+int ScalingCurve(const std::string& args, const std::string& log) {
+  const std::string command = "/usr/bin/python3 " + std::string(IMPLICIT_SIM_SOURCE_DIR) + "/scripts/scaling_curve " +
+                              args + " > " + log + " 2>&1";
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(RunnerCli, ScalingCurveFitsTheExponentsDrawsTheCurveAndRefusesBadArguments) {
+  const std::string dir = TempDir("scaling_curve");
+  ASSERT_EQ(std::system(("mkdir -p '" + dir + "'").c_str()), 0);
+  const std::string raw = dir + "/runs.jsonl";
+  {
+    std::ofstream out(raw);
+    for (int n : {25, 50, 100, 250, 500, 1000, 2000}) {
+      for (int repeat = 0; repeat < 3; ++repeat) {
+        // ours: 2 N^1.2 (the middle repeat is the median); 100 ellipsoids N^1.6; MuJoCo: 0.5 N^1.5. The N = 2000
+        // points lie outside the fit range, and ours at 1000 ellipsoids was cut (a cost far off the line).
+        const double spread = 0.9 + 0.1 * repeat;
+        const bool cut = n == 1000 && repeat == 1;
+        out << "{\"engine\": \"implicit_sim\", \"shape\": \"sphere\", \"n\": " << n << ", \"repeat\": " << repeat
+            << ", \"us_per_step\": " << 2.0 * std::pow(n, 1.2) * spread
+            << ", \"completed\": true, \"simulated_s\": 0.05, \"h\": 0.005, \"window_s\": 0.05}\n";
+        out << "{\"engine\": \"mujoco\", \"mujoco_version\": \"2.2.2\", \"shape\": \"sphere\", \"n\": " << n
+            << ", \"repeat\": " << repeat << ", \"us_per_step\": " << 0.5 * std::pow(n, 1.5)
+            << ", \"completed\": true, \"simulated_s\": 0.05, \"h\": 0.005, \"window_s\": 0.05}\n";
+        out << "{\"engine\": \"implicit_sim\", \"shape\": \"ellipsoid\", \"n\": " << n << ", \"repeat\": " << repeat
+            << ", \"us_per_step\": " << (n == 1000 ? 1e9 : 100.0 * std::pow(n, 1.6))
+            << ", \"completed\": " << (cut ? "false" : "true")
+            << ", \"simulated_s\": 0.05, \"h\": 0.005, \"window_s\": 0.05}\n";
+      }
+    }
+  }
+  const std::string log = dir + "/replot.log";
+  ASSERT_EQ(ScalingCurve("--replot " + raw + " --png " + dir + "/curve.png", log), 0);
+  std::ifstream log_file(log);
+  const std::string text((std::istreambuf_iterator<char>(log_file)), std::istreambuf_iterator<char>());
+  for (const char* line : {"- ours, spheres: cost ~ N^1.20 over N = 100..1000 (bar: <= 1.3, met)",
+                           "- MuJoCo, spheres: cost ~ N^1.50 over N = 100..1000\n",
+                           "- ours, ellipsoids: cost ~ N^1.60 over N = 100..1000 (bar: <= 1.3, missed)",
+                           "| sphere | 100 | 502 | 500 | 1 |", "| ellipsoid | 1000 | 1,000,000,000 (cut: --max-wall) | - | - |",
+                           "window 0.05 s"}) {
+    EXPECT_NE(text.find(line), std::string::npos) << line << " missing in\n" << text;
+  }
+  EXPECT_EQ(text.find("MuJoCo, ellipsoids"), std::string::npos) << text;
+  EXPECT_TRUE(IsPngWithContent(dir + "/curve.png"));
+  for (const char* bad : {"--ns 0", "--ns 25,x", "--shapes sphere,cube", "--fit 1000,100", "--fit 100",
+                          "--repeats 0", "--duration 0", "--max-wall -1", "--bogus", "--replot /nonexistent.jsonl",
+                          "--skip-build --workspace /nonexistent"}) {
+    EXPECT_EQ(ScalingCurve(std::string(bad) + " --out " + dir + "/bad.jsonl", dir + "/bad.log"), 2) << bad;
+  }
+  EXPECT_FALSE(Exists(dir + "/bad.jsonl"));
 }
 
 }  // namespace

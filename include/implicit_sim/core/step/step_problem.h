@@ -72,7 +72,9 @@ struct ContactResult;  // step/data.h
 class StepProblem final : public NcpProblem {
  public:
   // Every moving body and joint of the model; with all_pairs every model pair too, otherwise none until SetActivePairs.
-  explicit StepProblem(const Model& model, bool all_pairs = true);
+  // With all_bodies false: no moving body, joint or pair until SetBodies (an island's problem: building one of the
+  // whole model for each of N islands would cost O(N^2) at the first step).
+  explicit StepProblem(const Model& model, bool all_pairs = true, bool all_bodies = true);
 
   // Restricts the problem to the moving bodies of `slots` (velocity slots, ascending) and the joints `joints` (model
   // joint indices, ascending, each between bodies of `slots` or the world and fixed bodies), with no pair; the pairs
