@@ -35,14 +35,73 @@ double OverlapBound(const Model& model, const State& state, const ContactPair& p
   return PlaneCrossingBound(support1, support2, cp.p_W2, normal_W);
 }
 
-}  // namespace
-
-bool FindInitialOverlap(const Model& model, const State& state, double tolerance, Data* data, std::string* detail) {
+// The broad phase's candidate pairs of `state` (bounding volumes without inflation) into data->candidates.
+void FindCandidates(const Model& model, const State& state, Data* data) {
   for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
     data->X_WB[b] = state.X_WB(model, b);
     data->inflation[b] = 0.0;
   }
   data->broad.FindPairs(data->X_WB, data->inflation, &data->candidates);
+}
+
+// max { u . x : x in the posed shape } (m): the closed-form support point, else the oracle's support value.
+double Support(const ConvexShape& shape, const Pose& X_WB, const Vec3& u_W) {
+  Vec3 p_W;
+  return SupportPoint(shape, X_WB, u_W, &p_W) ? u_W.dot(p_W) : SupportValue(shape, X_WB, u_W);
+}
+
+// support1(-n) + support2(n) (m): how far body 1 must move along the unit n (pointing from body 2 towards body 1) to
+// clear body 2. Its positive part bounds the penetration depth from above for any n; a negative value is a
+// separation along n.
+double CrossingAlong(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2, const Pose& X_WB2,
+                     const Vec3& n_W) {
+  return Support(shape1, X_WB1, -n_W) + Support(shape2, X_WB2, n_W);
+}
+
+// True if the plane normal to the line between the shapes' centres separates them by more than `tolerance` (m);
+// only for shapes with closed-form support points (false otherwise: undecided).
+bool CentrePlaneSeparates(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2, const Pose& X_WB2,
+                          double tolerance) {
+  Vec3 p_W;
+  if (!SupportPoint(shape1, X_WB1, Vec3::UnitZ(), &p_W) || !SupportPoint(shape2, X_WB2, Vec3::UnitZ(), &p_W)) {
+    return false;
+  }
+  const Vec3 line_W = X_WB1 * shape1.X_BS.translation() - X_WB2 * shape2.X_BS.translation();
+  if (line_W.norm() == 0.0) return false;
+  return CrossingAlong(shape1, X_WB1, shape2, X_WB2, line_W.normalized()) < -tolerance;
+}
+
+// The geometric penetration bound of one pair (see MaxPenetrationBound), m.
+double PairPenetrationBound(const Model& model, const State& state, const ContactPair& pair, double tolerance) {
+  const ConvexShape& shape1 = model.bodies[pair.body1].shape;
+  const ConvexShape& shape2 = model.bodies[pair.body2].shape;
+  const Pose X_WB1 = state.X_WB(model, pair.body1), X_WB2 = state.X_WB(model, pair.body2);
+  ClosestPointsResult cp;
+  if (ClosedFormClosestPoints(shape1, X_WB1, shape2, X_WB2, &cp)) return std::max(0.0, -cp.distance);
+  if (CentrePlaneSeparates(shape1, X_WB1, shape2, X_WB2, tolerance)) return 0.0;
+  cp = ComputeClosestPoints(shape1, X_WB1, shape2, X_WB2);
+  if (cp.solved && cp.distance > tolerance) return 0.0;
+  Vec3 n1_W = -Vec3::UnitZ(), n2_W = Vec3::UnitZ();
+  double grad_norm;
+  MostActiveInequality(shape1, X_WB1, cp.p_W1, &n1_W, &grad_norm);
+  MostActiveInequality(shape2, X_WB2, cp.p_W2, &n2_W, &grad_norm);
+  return std::max(0.0, std::min(CrossingAlong(shape1, X_WB1, shape2, X_WB2, n2_W),
+                                CrossingAlong(shape1, X_WB1, shape2, X_WB2, -n1_W)));
+}
+
+}  // namespace
+
+double MaxPenetrationBound(const Model& model, const State& state, double tolerance, Data* data) {
+  FindCandidates(model, state, data);
+  double deepest = 0.0;
+  for (int p : data->candidates) {
+    deepest = std::max(deepest, PairPenetrationBound(model, state, model.pairs[p], tolerance));
+  }
+  return deepest;
+}
+
+bool FindInitialOverlap(const Model& model, const State& state, double tolerance, Data* data, std::string* detail) {
+  FindCandidates(model, state, data);
   for (int p : data->candidates) {
     const double depth = OverlapBound(model, state, model.pairs[p], tolerance);
     if (depth > tolerance) {

@@ -15,6 +15,14 @@ namespace implicit_sim {
 // bound. Uses the broad phase and its workspace in *data.
 bool FindInitialOverlap(const Model& model, const State& state, double tolerance, Data* data, std::string* detail);
 
+// An upper bound on the deepest overlap of two bodies of `state` (m), from the geometry alone (none of a step's
+// unknowns): over the broad phase's candidate pairs, the closed-form signed distance where there is one; otherwise 0
+// when a plane separates the pair (the plane normal to the centre line, or the distance oracle's closest points more
+// than `tolerance` apart), else the least plane-crossing bound max(0, support1(-n) + support2(n)) over the normals of
+// both bodies at the oracle's closest points. Uses the broad phase and its workspace in *data (a Data of its own:
+// the stepper's warm start is not touched, but its broad-phase workspace would be).
+double MaxPenetrationBound(const Model& model, const State& state, double tolerance, Data* data);
+
 // Tunnelling: an end-of-step solution z of the step from `start` in which a body has passed through another. The
 // end-of-step conditions alone allow it (a ball against the FAR face of a thin wall is a legal NCP solution), so each
 // pair of the problem is checked against the start of the step: its end-of-step separating plane (through a2, normal
