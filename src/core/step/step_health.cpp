@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "implicit_sim/core/geometry/distance_oracle.h"
 #include "implicit_sim/core/base/format.h"
@@ -58,17 +59,51 @@ double CrossingAlong(const ConvexShape& shape1, const Pose& X_WB1, const ConvexS
   return Support(shape1, X_WB1, -n_W) + Support(shape2, X_WB2, n_W);
 }
 
-// True if the plane normal to the line between the shapes' centres separates them by more than `tolerance` (m);
-// only for shapes with closed-form support points (false otherwise: undecided).
-bool CentrePlaneSeparates(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2, const Pose& X_WB2,
-                          double tolerance) {
-  Vec3 p_W;
-  if (!SupportPoint(shape1, X_WB1, Vec3::UnitZ(), &p_W) || !SupportPoint(shape2, X_WB2, Vec3::UnitZ(), &p_W)) {
-    return false;
-  }
+// The least support1(-n) + support2(n) over unit n (m) found by projected-gradient descent from the centre line,
+// with closed-form support points only (+inf when a shape has none). The gradient in n is p2(n) - p1(-n), the two
+// support points; a step that does not lower the value is halved. Stops once the value is below -tolerance (a
+// separation), at a stationary n (tangential gradient below 1e-9 m) or after 200 steps.
+double DescendCrossing(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2, const Pose& X_WB2,
+                       double tolerance) {
+  const auto evaluate = [&](const Vec3& n_W, Vec3* gradient_W) {
+    Vec3 p1_W, p2_W;
+    if (!SupportPoint(shape1, X_WB1, -n_W, &p1_W) || !SupportPoint(shape2, X_WB2, n_W, &p2_W)) {
+      return std::numeric_limits<double>::infinity();
+    }
+    *gradient_W = p2_W - p1_W;
+    return n_W.dot(*gradient_W);
+  };
   const Vec3 line_W = X_WB1 * shape1.X_BS.translation() - X_WB2 * shape2.X_BS.translation();
-  if (line_W.norm() == 0.0) return false;
-  return CrossingAlong(shape1, X_WB1, shape2, X_WB2, line_W.normalized()) < -tolerance;
+  Vec3 n_W = line_W.norm() > 0.0 ? Vec3(line_W.normalized()) : Vec3::UnitZ(), gradient_W;
+  double value = evaluate(n_W, &gradient_W);
+  double step = 1.0 / (shape1.BoundingRadius() + shape2.BoundingRadius());  // rad per m of gradient
+  for (int k = 0; k < 200 && std::isfinite(value) && value >= -tolerance; ++k) {
+    const Vec3 tangential_W = gradient_W - gradient_W.dot(n_W) * n_W;
+    if (tangential_W.norm() <= 1e-9) break;
+    const Vec3 trial_W = (n_W - step * tangential_W).normalized();
+    Vec3 trial_gradient_W;
+    const double trial = evaluate(trial_W, &trial_gradient_W);
+    if (trial < value) {
+      n_W = trial_W, value = trial, gradient_W = trial_gradient_W;
+    } else {
+      step *= 0.5;
+    }
+  }
+  return value;
+}
+
+// The bound through the distance oracle's closest points: 0 when they are more than `tolerance` apart, else the
+// smaller crossing over the normals of both bodies there.
+double OracleCrossing(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2, const Pose& X_WB2,
+                      double tolerance) {
+  const ClosestPointsResult cp = ComputeClosestPoints(shape1, X_WB1, shape2, X_WB2);
+  if (cp.solved && cp.distance > tolerance) return 0.0;
+  Vec3 n1_W = -Vec3::UnitZ(), n2_W = Vec3::UnitZ();
+  double grad_norm;
+  MostActiveInequality(shape1, X_WB1, cp.p_W1, &n1_W, &grad_norm);
+  MostActiveInequality(shape2, X_WB2, cp.p_W2, &n2_W, &grad_norm);
+  return std::min(CrossingAlong(shape1, X_WB1, shape2, X_WB2, n2_W),
+                  CrossingAlong(shape1, X_WB1, shape2, X_WB2, -n1_W));
 }
 
 // The geometric penetration bound of one pair (see MaxPenetrationBound), m.
@@ -78,15 +113,9 @@ double PairPenetrationBound(const Model& model, const State& state, const Contac
   const Pose X_WB1 = state.X_WB(model, pair.body1), X_WB2 = state.X_WB(model, pair.body2);
   ClosestPointsResult cp;
   if (ClosedFormClosestPoints(shape1, X_WB1, shape2, X_WB2, &cp)) return std::max(0.0, -cp.distance);
-  if (CentrePlaneSeparates(shape1, X_WB1, shape2, X_WB2, tolerance)) return 0.0;
-  cp = ComputeClosestPoints(shape1, X_WB1, shape2, X_WB2);
-  if (cp.solved && cp.distance > tolerance) return 0.0;
-  Vec3 n1_W = -Vec3::UnitZ(), n2_W = Vec3::UnitZ();
-  double grad_norm;
-  MostActiveInequality(shape1, X_WB1, cp.p_W1, &n1_W, &grad_norm);
-  MostActiveInequality(shape2, X_WB2, cp.p_W2, &n2_W, &grad_norm);
-  return std::max(0.0, std::min(CrossingAlong(shape1, X_WB1, shape2, X_WB2, n2_W),
-                                CrossingAlong(shape1, X_WB1, shape2, X_WB2, -n1_W)));
+  const double descent = DescendCrossing(shape1, X_WB1, shape2, X_WB2, tolerance);
+  if (descent <= tolerance) return std::max(0.0, descent);
+  return std::max(0.0, std::min(descent, OracleCrossing(shape1, X_WB1, shape2, X_WB2, tolerance)));
 }
 
 }  // namespace

@@ -16,11 +16,13 @@ namespace implicit_sim {
 bool FindInitialOverlap(const Model& model, const State& state, double tolerance, Data* data, std::string* detail);
 
 // An upper bound on the deepest overlap of two bodies of `state` (m), from the geometry alone (none of a step's
-// unknowns): over the broad phase's candidate pairs, the closed-form signed distance where there is one; otherwise 0
-// when a plane separates the pair (the plane normal to the centre line, or the distance oracle's closest points more
-// than `tolerance` apart), else the least plane-crossing bound max(0, support1(-n) + support2(n)) over the normals of
-// both bodies at the oracle's closest points. Uses the broad phase and its workspace in *data (a Data of its own:
-// the stepper's warm start is not touched, but its broad-phase workspace would be).
+// unknowns). Over the broad phase's candidate pairs: the closed-form signed distance where there is one (a primitive
+// on a half-space, two spheres); otherwise the least c(n) = support1(-n) + support2(n) over unit n found by descent
+// from the centre line with closed-form support points (how far body 1 must move along n to clear body 2: its
+// positive part bounds the depth from above for every n, a negative value is a separation), and, when that is still
+// above `tolerance`, also c(n) at the normals of both bodies at the distance oracle's closest points (0 when the
+// oracle finds them more than `tolerance` apart); the smallest of these, at least 0. Uses the broad phase and its
+// workspace in *data (a Data of its own: the stepper's warm start is not touched, but its broad-phase workspace is).
 double MaxPenetrationBound(const Model& model, const State& state, double tolerance, Data* data);
 
 // Tunnelling: an end-of-step solution z of the step from `start` in which a body has passed through another. The
