@@ -92,12 +92,11 @@ double DescendCrossing(const ConvexShape& shape1, const Pose& X_WB1, const Conve
   return value;
 }
 
-// The bound through the distance oracle's closest points: 0 when they are more than `tolerance` apart, else the
-// smaller crossing over the normals of both bodies there.
-double OracleCrossing(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2, const Pose& X_WB2,
-                      double tolerance) {
+// c(n) at the normals of both bodies at the distance oracle's closest points, the smaller (m). The oracle's distance
+// alone does not decide: it reports overlapping bodies at about its own tolerance, not 0; for bodies it finds apart
+// the normals give about minus their distance.
+double OracleCrossing(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2, const Pose& X_WB2) {
   const ClosestPointsResult cp = ComputeClosestPoints(shape1, X_WB1, shape2, X_WB2);
-  if (cp.solved && cp.distance > tolerance) return 0.0;
   Vec3 n1_W = -Vec3::UnitZ(), n2_W = Vec3::UnitZ();
   double grad_norm;
   MostActiveInequality(shape1, X_WB1, cp.p_W1, &n1_W, &grad_norm);
@@ -115,7 +114,7 @@ double PairPenetrationBound(const Model& model, const State& state, const Contac
   if (ClosedFormClosestPoints(shape1, X_WB1, shape2, X_WB2, &cp)) return std::max(0.0, -cp.distance);
   const double descent = DescendCrossing(shape1, X_WB1, shape2, X_WB2, tolerance);
   if (descent <= tolerance) return std::max(0.0, descent);
-  return std::max(0.0, std::min(descent, OracleCrossing(shape1, X_WB1, shape2, X_WB2, tolerance)));
+  return std::max(0.0, std::min(descent, OracleCrossing(shape1, X_WB1, shape2, X_WB2)));
 }
 
 }  // namespace

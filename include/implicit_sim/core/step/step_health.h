@@ -20,8 +20,8 @@ bool FindInitialOverlap(const Model& model, const State& state, double tolerance
 // on a half-space, two spheres); otherwise the least c(n) = support1(-n) + support2(n) over unit n found by descent
 // from the centre line with closed-form support points (how far body 1 must move along n to clear body 2: its
 // positive part bounds the depth from above for every n, a negative value is a separation), and, when that is still
-// above `tolerance`, also c(n) at the normals of both bodies at the distance oracle's closest points (0 when the
-// oracle finds them more than `tolerance` apart); the smallest of these, at least 0. Uses the broad phase and its
+// above `tolerance`, also c(n) at the normals of both bodies at the distance oracle's closest points; the smallest of
+// these, at least 0. Every value is certified by a plane: none rests on the oracle's distance. Uses the broad phase and its
 // workspace in *data (a Data of its own: the stepper's warm start is not touched, but its broad-phase workspace is).
 double MaxPenetrationBound(const Model& model, const State& state, double tolerance, Data* data);
 
