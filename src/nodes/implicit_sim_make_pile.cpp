@@ -1,4 +1,5 @@
-// implicit_sim_make_pile --n N --shape sphere|ellipsoid [--seed S] --out FILE: writes the S1 pile scene.
+// implicit_sim_make_pile --n N --shape sphere|ellipsoid [--seed S] [--orientation aligned|random] --out FILE: writes
+// the S1 pile scene.
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
@@ -8,11 +9,13 @@
 #include "implicit_sim/core/io/pile_scene.h"
 
 int main(int argc, char** argv) {
-  const char* usage = "usage: implicit_sim_make_pile --n N --shape sphere|ellipsoid [--seed S] --out FILE";
+  const char* usage =
+      "usage: implicit_sim_make_pile --n N --shape sphere|ellipsoid [--seed S] [--orientation aligned|random] --out FILE";
   std::map<std::string, std::string> values;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
-    if ((flag != "--n" && flag != "--shape" && flag != "--seed" && flag != "--out") || i + 1 >= argc) {
+    if ((flag != "--n" && flag != "--shape" && flag != "--seed" && flag != "--orientation" && flag != "--out") ||
+        i + 1 >= argc) {
       std::cerr << "implicit_sim_make_pile: bad argument '" << flag << "' (" << usage << ")\n";
       return 2;
     }
@@ -31,9 +34,16 @@ int main(int argc, char** argv) {
     std::cerr << "implicit_sim_make_pile: --n must be in [1, 100000], --shape sphere or ellipsoid, --seed >= 0\n";
     return 2;
   }
+  const std::string orientation = values.count("--orientation") ? values["--orientation"] : "aligned";
+  if (orientation != "aligned" && orientation != "random") {
+    std::cerr << "implicit_sim_make_pile: --orientation must be aligned or random, got '" << orientation << "'\n";
+    return 2;
+  }
+  // The generator's std::mt19937 takes the seed modulo 2^32.
   const std::string urdf = implicit_sim::MakePileUrdf(
       static_cast<int>(n), shape == "sphere" ? implicit_sim::PileShape::kSphere : implicit_sim::PileShape::kEllipsoid,
-      static_cast<unsigned>(seed));
+      static_cast<unsigned>(seed), true,
+      orientation == "random" ? implicit_sim::PileOrientation::kRandom : implicit_sim::PileOrientation::kAligned);
   std::ofstream out(values["--out"]);
   out << urdf;
   if (!out) {

@@ -1,16 +1,20 @@
 // Headless runner: implicit_sim_run --scene FILE --duration T --dt H --out DIR
 // Writes DIR/trajectory.csv and DIR/summary.json (see doc/runner.md). No roscore needed. With --stop-at-rest E:S the run
-// ends early once the kinetic energy has stayed below E (J) for S (s) of simulated time.
+// ends early once the kinetic energy has stayed below E (J) for S (s) of simulated time. With --check-penetration
+// every step end is checked for overlaps from the geometry alone (MaxPenetrationBound), not from the step's gaps.
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <string>
 
 #include "implicit_sim/core/io/run_output.h"
 #include "implicit_sim/core/model/state.h"
+#include "implicit_sim/core/step/step_health.h"
 #include "implicit_sim/core/step/time_stepper.h"
 #include "implicit_sim/core/model/urdf_loader.h"
 
@@ -18,7 +22,7 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: implicit_sim_run --scene FILE --duration T --dt H --out DIR [--tolerance TOL] [--max-iterations N] "
-    "[--solver newton|ipopt] [--threads N] [--stop-at-rest E:S]";
+    "[--solver newton|ipopt] [--threads N] [--stop-at-rest E:S] [--check-penetration]";
 
 struct Args {
   std::string scene, out;
@@ -27,7 +31,11 @@ struct Args {
   bool stop_at_rest = false;
   double rest_energy = 0.0;  // J: "at rest" means kinetic energy < rest_energy
   double rest_hold = 0.0;    // s: ... at every step over this much simulated time
+  bool check_penetration = false;  // summary.json's max_penetration_oracle: a geometric check of every step end
 };
+
+// Pairs closer than this (m) are measured by the separating-plane bound rather than called separated.
+constexpr double kPenetrationCheckTolerance = 1e-9;
 
 // A finite number > 0, read with '.' as the decimal point whatever the locale (std::from_chars).
 double ParsePositive(const std::string& flag, const std::string& text) {
@@ -79,6 +87,10 @@ Args ParseArgs(int argc, char** argv) {
       std::cout << kUsage << "\n";
       std::exit(0);
     }
+    if (flag == "--check-penetration") {  // a switch: no value
+      values[flag] = "";
+      continue;
+    }
     if (flag != "--scene" && flag != "--duration" && flag != "--out" && flag != "--stop-at-rest" &&
         !implicit_sim::FindOptionByRunnerFlag(flag)) {
       throw std::invalid_argument("unknown flag '" + flag + "' (" + kUsage + ")");
@@ -93,6 +105,7 @@ Args ParseArgs(int argc, char** argv) {
   args.scene = values["--scene"];
   args.out = values["--out"];
   args.duration = ParsePositive("--duration", values["--duration"]);
+  args.check_penetration = values.count("--check-penetration") > 0;
   ParseStepperFlags(values, &args.options);
   if (values.count("--stop-at-rest")) {
     const std::string& text = values["--stop-at-rest"];
@@ -151,6 +164,9 @@ int main(int argc, char** argv) {
     // energy < rest_energy (t = 0 included); the run stops once the stretch lasts rest_hold (to half a step).
     double rest_since = summary.kinetic_energy_initial < args.rest_energy ? state.t : -1.0;
     summary.at_rest_rule = args.stop_at_rest;
+    summary.penetration_checked = args.check_penetration;
+    std::unique_ptr<Data> check_data;  // the check's own broad-phase workspace
+    if (args.check_penetration) check_data = std::make_unique<Data>(model);
     for (long i = 0; i < steps; ++i) {
       const StepReport report = Step(model, options, &state, &data);
       if (!report.advanced) {
@@ -161,6 +177,10 @@ int main(int argc, char** argv) {
         break;
       }
       summary.Add(report, data);
+      if (check_data) {
+        summary.max_penetration_oracle = std::max(
+            summary.max_penetration_oracle, MaxPenetrationBound(model, state, kPenetrationCheckTolerance, check_data.get()));
+      }
       writer.WriteStep(state, data, report);
       if (args.stop_at_rest) {
         if (KineticEnergy(model, state) < args.rest_energy) {

@@ -1,6 +1,7 @@
 // Batch studies (doc/batch.md): implicit_sim_batch through GNU parallel on this machine, resume after a
 // killed run, the cube's resting faces against 1/6, the Slurm array script, the sweep file's error contract, and the
-// runner's --stop-at-rest rule. Every check is on outputs (bytes, counts, fields); nothing is timed.
+// runner's --stop-at-rest rule, pile sweeps (pile:) and their reliability fields, implicit_sim_make_pile --orientation
+// random. Every check is on outputs (bytes, counts, fields); nothing is timed.
 #include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -26,6 +27,8 @@ const std::string kRunner = IMPLICIT_SIM_RUNNER;
 const std::string kBatch = "/usr/bin/python3 " + kSource + "/scripts/implicit_sim_batch";
 const std::string kCubeSweep = kSource + "/scenes/sweeps/cube_drop.yaml";
 const std::string kCylinderSweep = kSource + "/scenes/sweeps/cylinder_drop.yaml";
+const std::string kPileSweep = kSource + "/scenes/sweeps/pile_ellipsoid50.yaml";
+const std::string kMakePile = kRunner.substr(0, kRunner.rfind('/')) + "/implicit_sim_make_pile";  // built beside it
 
 int Shell(const std::string& command) {
   const int status = std::system(command.c_str());
@@ -118,13 +121,18 @@ TEST(BatchStudy, FortyCubeSamplesThroughGnuParallelGiveTheSameJsonlTwice) {
     seeds.insert(Field(line, "seed"));
     for (const char* key : {"params", "orientation", "position", "velocity", "angular_velocity", "mu", "final_pose",
                             "class", "tilt_deg", "stop_reason", "time_to_rest", "t_end", "max_penetration",
-                            "solver_failures", "runner_exit"}) {
+                            "solver_failures", "runner_exit", "nonconverged_steps", "bodies_out_of_box", "nan",
+                            "max_penetration_m"}) {
       EXPECT_NE(line.find(std::string("\"") + key + "\": "), std::string::npos) << key << " missing in " << line;
     }
     EXPECT_EQ(Field(line, "stop_reason"), "\"at_rest\"") << line;
     EXPECT_EQ(Field(line, "solver_failures"), "0") << line;
     EXPECT_LT(std::stod(Field(line, "max_penetration")), 1e-6) << line;
     EXPECT_LT(std::stod(Field(line, "tilt_deg")), 1.0) << line;  // flat on a face
+    EXPECT_EQ(Field(line, "nonconverged_steps"), "0") << line;
+    EXPECT_EQ(Field(line, "bodies_out_of_box"), "null") << line;  // no box around a single cube
+    EXPECT_EQ(Field(line, "nan"), "false") << line;
+    EXPECT_LT(std::stod(Field(line, "max_penetration_m")), 1e-6) << line;
   }
   EXPECT_EQ(seeds.size(), 40u);
   EXPECT_TRUE(IsPng(out + "/report_faces.png"));
@@ -407,6 +415,168 @@ TEST(RunnerStopAtRest, EndsTheRunOnceTheKineticEnergyStaysBelowTheThreshold) {
     EXPECT_NE(Read(err).find("--stop-at-rest"), std::string::npos) << bad << ": " << Read(err);
     EXPECT_FALSE(Exists(out + "_bad")) << bad;
   }
+}
+
+// The pile sweep of the study with everything else kept: n bodies for `duration` seconds.
+std::string TinyPileSweep(const std::string& dir, int n, double duration) {
+  std::string text = Read(kPileSweep);
+  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+           {"n: 50", "n: " + std::to_string(n)}, {"duration: 2", "duration: " + std::to_string(duration)}}) {
+    const size_t at = text.find(from);
+    if (at == std::string::npos) return "";
+    text.replace(at, from.size(), to);
+  }
+  const std::string sweep = dir + "/pile.yaml";
+  Shell("mkdir -p " + dir);
+  std::ofstream(sweep) << text;
+  return sweep;
+}
+
+// A pile sample (3 ellipsoids, 0.3 s): its scene comes from implicit_sim_make_pile with the sample's seed, and its
+// line holds the reliability fields with sane values; the report prints them.
+TEST(PileStudy, ATinyPileSampleRunsAndItsLineHasTheReliabilityFields) {
+  const std::string dir = TempDir("pile");
+  const std::string sweep = TinyPileSweep(dir, 3, 0.3);
+  ASSERT_FALSE(sweep.empty());
+  const std::string out = dir + "/study";
+  ASSERT_EQ(Batch(sweep + " --out " + out + " --samples 1 --jobs 1 --keep-runs", out), 0) << Read(out + ".err");
+  const std::vector<std::string> lines = Lines(Read(out + "/results.jsonl"));
+  ASSERT_EQ(lines.size(), 1u);
+  const std::string& line = lines[0];
+  EXPECT_EQ(Field(line, "nonconverged_steps"), "0") << line;
+  EXPECT_EQ(Field(line, "bodies_out_of_box"), "0") << line;
+  EXPECT_EQ(Field(line, "nan"), "false") << line;
+  const double depth = std::stod(Field(line, "max_penetration_m"));
+  EXPECT_GE(depth, 0.0) << line;
+  EXPECT_LT(depth, 1e-6) << line;
+  EXPECT_EQ(Field(line, "class"), "null") << line;
+  EXPECT_EQ(Field(line, "final_pose"), "null") << line;
+  EXPECT_NE(line.find("\"pile\": {\"n\": 3, \"shape\": \"ellipsoid\", \"orientation\": \"random\", \"seed\": "),
+            std::string::npos)
+      << line;
+  const std::string stop = Field(line, "stop_reason");
+  EXPECT_TRUE(stop == "\"duration\"" || stop == "\"at_rest\"") << line;
+  // The run's scene is the generator's for the sample's seed modulo 2^32.
+  const std::string seed = Field(line.substr(line.find("\"pile\"")), "seed");
+  ASSERT_EQ(Shell(kMakePile + " --n 3 --shape ellipsoid --orientation random --seed " + seed + " --out " + dir +
+                  "/again.urdf"),
+            0);
+  EXPECT_EQ(Read(out + "/runs/0/scene.urdf"), Read(dir + "/again.urdf"));
+  EXPECT_NE(Read(out + "/runs/0/summary.json").find("\"max_penetration_oracle\": "), std::string::npos);
+  const std::string report = Read(out + ".out");
+  EXPECT_NE(report.find("non-converged steps: 0 (in 0 samples); bodies out of the box: 0 (in 0 samples); samples "
+                        "with NaN: 0"),
+            std::string::npos)
+      << report;
+  EXPECT_TRUE(IsPng(out + "/report_time_to_rest.png"));
+  EXPECT_FALSE(Exists(out + "/report_faces.png"));  // a pile has no classes
+}
+
+// The checks of a run's trajectory can fail: a body through a wall, one below the floor and a NaN are counted.
+TEST(PileStudy, TheTrajectoryChecksCountBodiesOutOfTheBoxAndNaN) {
+  const std::string dir = TempDir("checks");
+  Shell("mkdir -p " + dir);
+  std::string header = "t";
+  for (const char* body : {"a", "b", "c"}) {
+    for (const char* c : {"x", "y", "z", "qw", "qx", "qy", "qz", "vx", "vy", "vz", "wx", "wy", "wz"}) {
+      header += std::string(",") + body + "." + c;
+    }
+  }
+  const std::string rest = ",1,0,0,0,0,0,0,0,0,0";
+  // a: ends beyond the wall x = 0.5; b: dips below the floor at t = 0.005, back inside at the end; c: inside.
+  std::ofstream(dir + "/trajectory.csv") << header << ",energy.kinetic\n"
+                                         << "0,0,0,0.1" << rest << ",0.2,0,0.1" << rest << ",0,0.2,0.1" << rest
+                                         << ",nan\n"
+                                         << "0.005,0.3,0,0.1" << rest << ",0.2,0,-0.01" << rest << ",0,0.2,0.1" << rest
+                                         << ",0\n"
+                                         << "0.01,0.6,0,0.1" << rest << ",0.2,0,0.04" << rest << ",0,0.2,0.1" << rest
+                                         << ",0\n";
+  const std::string check = "import importlib.machinery as m; b = m.SourceFileLoader('b', '" + kSource +
+                            "/scripts/implicit_sim_batch').load_module(); print(b.trajectory_checks('" + dir +
+                            "/trajectory.csv', BOX))";
+  ASSERT_EQ(Shell("/usr/bin/python3 -c \"" + std::regex_replace(check, std::regex("BOX"), "True") + "\" > " + dir +
+                  "/box.txt"),
+            0);
+  EXPECT_EQ(Read(dir + "/box.txt"), "{'nan': False, 'bodies_out_of_box': 2}\n");  // energy's nan is no state
+  ASSERT_EQ(Shell("/usr/bin/python3 -c \"" + std::regex_replace(check, std::regex("BOX"), "False") + "\" > " + dir +
+                  "/nobox.txt"),
+            0);
+  EXPECT_EQ(Read(dir + "/nobox.txt"), "{'nan': False, 'bodies_out_of_box': None}\n");
+  Shell("sed -i '3s/^0.005,0.3,/0.005,nan,/' " + dir + "/trajectory.csv");
+  ASSERT_EQ(Shell("/usr/bin/python3 -c \"" + std::regex_replace(check, std::regex("BOX"), "True") + "\" > " + dir +
+                  "/nan.txt"),
+            0);
+  EXPECT_EQ(Read(dir + "/nan.txt"), "{'nan': True, 'bodies_out_of_box': 2}\n");
+}
+
+// The shipped study parses (its Slurm script has 200 array tasks); bad pile values are refused with exit 2, one
+// line naming the key and its allowed values, and nothing written.
+TEST(PileStudy, ThePileKeyParsesAndBadValuesAreRefusedNamingTheKey) {
+  const std::string dir = TempDir("pile_keys");
+  Shell("mkdir -p " + dir);
+  ASSERT_EQ(Batch(kPileSweep + " --out " + dir + "/shipped --slurm-script " + dir + "/pile.sbatch", dir + "/shipped"),
+            0)
+      << Read(dir + "/shipped.err");
+  EXPECT_NE(Read(dir + "/pile.sbatch").find("#SBATCH --array=0-199\n"), std::string::npos);
+  const std::string sweep_json = Read(dir + "/shipped/sweep.json");
+  for (const char* expected : {"\"n\": 50", "\"shape\": \"ellipsoid\"", "\"orientation\": \"random\"", "\"dt\": 0.005"}) {
+    EXPECT_NE(sweep_json.find(expected), std::string::npos) << expected << " in " << sweep_json;
+  }
+  const std::string good = Read(kPileSweep);
+  struct Case {
+    std::string name, from, to;
+    std::vector<std::string> words;
+  };
+  const std::vector<Case> cases = {
+      {"zero_n", "n: 50", "n: 0", {"pile.n", "[1, 100000]"}},
+      {"fractional_n", "n: 50", "n: 2.5", {"pile.n", "integer"}},
+      {"bad_shape", "shape: ellipsoid", "shape: cube", {"pile.shape", "sphere, ellipsoid"}},
+      {"bad_orientation", "orientation: random", "orientation: tilted", {"pile.orientation", "random", "aligned"}},
+      {"unknown_key", "shape: ellipsoid", "shape: ellipsoid\n  size: 3", {"pile.size", "unknown key"}},
+      {"no_shape", "  shape: ellipsoid\n", "", {"pile.shape", "missing"}},
+      {"with_scene", "samples: 200", "samples: 200\nscene: ../cube_drop.urdf", {"scene", "not allowed with pile"}},
+      {"not_a_mapping", "pile:\n(  [^\n]*\n)+", "pile: 50\n", {"pile", "mapping"}},
+  };
+  for (const Case& c : cases) {
+    const std::string text = std::regex_replace(good, std::regex(c.from), c.to, std::regex_constants::format_first_only);
+    ASSERT_NE(text, good) << c.name;
+    const std::string sweep = dir + "/" + c.name + ".yaml";
+    std::ofstream(sweep) << text;
+    const int status = Batch(sweep + " --out " + dir + "/" + c.name + " --samples 1", dir + "/" + c.name);
+    const std::string err = Read(dir + "/" + c.name + ".err");
+    EXPECT_EQ(status, 2) << c.name << ": " << err;
+    EXPECT_EQ(Lines(err).size(), 1u) << c.name << ": " << err;
+    for (const std::string& word : c.words) EXPECT_NE(err.find(word), std::string::npos) << c.name << ": " << err;
+    EXPECT_FALSE(Exists(dir + "/" + c.name)) << c.name << ": the output directory was created";
+  }
+}
+
+// implicit_sim_make_pile --orientation random: the same bytes for a seed, other bytes for another seed, the default
+// layout unchanged by the flag's existence (aligned is the default), and a bad value refused.
+TEST(PileStudy, MakePileRandomOrientationsAreDeterministicForASeed) {
+  const std::string dir = TempDir("make_pile");
+  Shell("mkdir -p " + dir);
+  const std::string make = kMakePile + " --n 50 --shape ellipsoid";
+  ASSERT_EQ(Shell(make + " --orientation random --seed 11 --out " + dir + "/a.urdf"), 0);
+  ASSERT_EQ(Shell(make + " --orientation random --seed 11 --out " + dir + "/b.urdf"), 0);
+  ASSERT_EQ(Shell(make + " --orientation random --seed 12 --out " + dir + "/c.urdf"), 0);
+  ASSERT_EQ(Shell(make + " --seed 11 --out " + dir + "/default.urdf"), 0);
+  ASSERT_EQ(Shell(make + " --orientation aligned --seed 11 --out " + dir + "/aligned.urdf"), 0);
+  EXPECT_EQ(Read(dir + "/a.urdf"), Read(dir + "/b.urdf"));
+  EXPECT_NE(Read(dir + "/a.urdf"), Read(dir + "/c.urdf"));
+  EXPECT_EQ(Read(dir + "/default.urdf"), Read(dir + "/aligned.urdf"));
+  EXPECT_NE(Read(dir + "/a.urdf").find("Random orientations"), std::string::npos);
+  // Non-overlapping: the runner's first step refuses overlaps (initial_overlap) and its geometric check reports
+  // none after one step.
+  ASSERT_EQ(Shell(kRunner + " --scene " + dir + "/a.urdf --duration 0.005 --dt 0.005 --threads 1 --check-penetration --out " +
+                  dir + "/run > /dev/null 2>&1"),
+            0);
+  const std::string summary = Read(dir + "/run/summary.json");
+  EXPECT_NE(summary.find("\"stop_reason\": \"duration\""), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"max_penetration_oracle\": 0\n"), std::string::npos) << summary;
+  EXPECT_EQ(Shell(make + " --orientation tilted --out " + dir + "/bad.urdf 2> " + dir + "/bad.err"), 2);
+  EXPECT_EQ(Read(dir + "/bad.err"), "implicit_sim_make_pile: --orientation must be aligned or random, got 'tilted'\n");
+  EXPECT_FALSE(Exists(dir + "/bad.urdf"));
 }
 
 }  // namespace

@@ -60,6 +60,7 @@ std::string RunSummary::ToJson() const {
   json += "  \"t_end\": " + FormatNumber(t_end) + ",\n";
   json += "  \"stop_reason\": \"" + stop_reason + "\"";
   if (at_rest_rule) json += ",\n  \"time_to_rest\": " + (time_to_rest >= 0.0 ? FormatNumber(time_to_rest) : "null");
+  if (penetration_checked) json += ",\n  \"max_penetration_oracle\": " + FormatNumber(max_penetration_oracle);
   return json + "\n}\n";
 }
 

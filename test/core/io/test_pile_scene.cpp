@@ -1,7 +1,9 @@
 // The S1 pile generator: the scene loads, has the specified layout and draws, and starts without overlaps.
 #include "implicit_sim/core/io/pile_scene.h"
 
+#include <algorithm>
 #include <random>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -76,6 +78,54 @@ TEST(PileScene, EllipsoidRowsAreSpreadToTheNearestNonOverlappingLayout) {
   EXPECT_GT(overlapping_before, 10);
   EXPECT_EQ(overlapping_after, 0);
   EXPECT_LT(max_shift, 0.02);
+}
+
+// --orientation random: the layout of pile_scene.h from the seed's draws, orientations uniform on SO(3), and no two
+// bodies (nor a body and a wall) overlap at the start.
+TEST(PileScene, RandomOrientationsFollowTheSeedAndStartApart) {
+  const std::string urdf = MakePileUrdf(50, PileShape::kEllipsoid, 7, true, PileOrientation::kRandom);
+  EXPECT_EQ(urdf, MakePileUrdf(50, PileShape::kEllipsoid, 7, true, PileOrientation::kRandom));
+  EXPECT_NE(urdf, MakePileUrdf(50, PileShape::kEllipsoid, 8, true, PileOrientation::kRandom));
+  const int n = 1000;
+  const std::vector<Pose> X_WB = RandomPileLayout(n, 7);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> jitter(-0.01, 0.01), uniform(0.0, 1.0);
+  Mat3 mean = Mat3::Zero();
+  double min_spacing = 1e9;
+  for (int i = 0; i < n; ++i) {
+    const double j1 = jitter(rng), j2 = jitter(rng), j3 = jitter(rng);
+    for (int k = 0; k < 3; ++k) uniform(rng);
+    const Vec3 expected(-0.42 + 0.14 * (i % 7) + j1, -0.42 + 0.14 * ((i / 7) % 7) + j2,
+                        0.08 + 0.14 * (i / 49) + std::abs(j3));
+    EXPECT_EQ(X_WB[i].translation(), expected) << i;
+    const Mat3 R = X_WB[i].linear();
+    EXPECT_TRUE((R.transpose() * R).isApprox(Mat3::Identity(), 1e-12)) << i;
+    EXPECT_NEAR(R.determinant(), 1.0, 1e-12) << i;
+    mean += R / n;
+    // The bounding sphere (0.06 m) inside the walls and above the floor.
+    EXPECT_LE(X_WB[i].translation().head<2>().cwiseAbs().maxCoeff(), 0.5 - 0.07 + 1e-12) << i;
+    EXPECT_GE(X_WB[i].translation().z(), 0.08) << i;
+    for (int k = std::max(0, i - 60); k < i; ++k) {  // neighbours in the row, the rows around and the layer below
+      min_spacing = std::min(min_spacing, (X_WB[i].translation() - X_WB[k].translation()).norm());
+    }
+  }
+  EXPECT_GE(min_spacing, 0.12);  // two bounding spheres of 0.06 m at most touch
+  // Uniform on SO(3): every entry of R has mean 0 (standard deviation 1/sqrt(3) per rotation: 0.018 over 1000).
+  EXPECT_LT(mean.cwiseAbs().maxCoeff(), 0.1) << mean;
+  // The generated scene by the distance oracle: no pair of ellipsoids within 1e-6 m.
+  const Model model = LoadSceneFromString(urdf, "random");
+  ASSERT_EQ(model.num_moving(), 50);
+  int close_pairs = 0;
+  for (int i = 0; i < 50; ++i) {
+    const Body& a = model.bodies[model.FindBody("body_" + std::to_string(i))];
+    for (int k = 0; k < i; ++k) {
+      const Body& b = model.bodies[model.FindBody("body_" + std::to_string(k))];
+      if ((a.X_WB0.translation() - b.X_WB0.translation()).norm() > 0.14) continue;
+      ++close_pairs;
+      EXPECT_GT(FindClosestPoints(a.shape, a.X_WB0, b.shape, b.X_WB0).distance, 1e-6) << i << " " << k;
+    }
+  }
+  EXPECT_GT(close_pairs, 10);  // the check saw neighbours
 }
 
 }  // namespace

@@ -12,6 +12,15 @@
 // pool-adjacent-violators); y and z spacings cannot overlap (>= 0.10 m for a 0.10 m width, 0.12 m for a 0.08 m
 // height), so the result overlaps nowhere, and a row needs 0.84 m of the 0.88 m the walls leave. The URDF comment
 // says how many bodies moved and the largest shift. Spheres never overlap and are left as they are.
+//
+// With random orientations (PileOrientation::kRandom, used by the batch studies) the layout is coarser, so that the
+// bounding spheres (radius 0.06 m for either shape) cannot overlap whatever the orientations:
+// body i: layer = i / 49, row = (i / 7) % 7, col = i % 7;
+// x = -0.42 + 0.14 col + j1, y = -0.42 + 0.14 row + j2, z = 0.08 + 0.14 layer + |j3|, then the orientation from
+// u1, u2, u3 (Shoemake's uniform quaternion on SO(3)); j1, j2, j3 from uniform_real_distribution(-0.01, 0.01) and
+// u1, u2, u3 from uniform_real_distribution(0, 1), drawn per body in that order over std::mt19937(seed). Centres are
+// at least 0.12 m apart (two bounding spheres at most touch), at least 0.07 m from every wall and 0.08 m above the
+// floor (a bounding sphere needs 0.06 m). No row is spread.
 #pragma once
 
 #include <string>
@@ -22,16 +31,22 @@
 namespace implicit_sim {
 
 enum class PileShape { kSphere, kEllipsoid };
+enum class PileOrientation { kAligned, kRandom };
 
 // The scenario's poses of bodies 0 .. n-1 (axis-aligned).
 std::vector<Pose> PileLayout(int n, unsigned seed);
+
+// The poses of bodies 0 .. n-1 with orientations uniform on SO(3) (the 7 x 7 layout above).
+std::vector<Pose> RandomPileLayout(int n, unsigned seed);
 
 // Spreads each row of 8 consecutive bodies (ascending x) so that x-centres are at least `length` apart, with the
 // least-squares change of the x-centres; returns how many bodies moved.
 int SeparateRows(std::vector<Pose>* X_WB, double length);
 
 // The scene as URDF text (links "floor", "wall_px", "wall_nx", "wall_py", "wall_ny", "body_<i>").
-// Throws std::invalid_argument for n outside [1, 100000].
-std::string MakePileUrdf(int n, PileShape shape, unsigned seed = 42, bool separate_overlaps = true);
+// Throws std::invalid_argument for n outside [1, 100000]. With PileOrientation::kRandom the layout is
+// RandomPileLayout and separate_overlaps has no effect (nothing overlaps).
+std::string MakePileUrdf(int n, PileShape shape, unsigned seed = 42, bool separate_overlaps = true,
+                         PileOrientation orientation = PileOrientation::kAligned);
 
 }  // namespace implicit_sim

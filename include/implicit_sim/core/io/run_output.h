@@ -46,6 +46,8 @@ struct RunSummary {
   std::string stop_reason = "duration";  // "duration", "at_rest" or "refused"
   bool at_rest_rule = false;           // the run had a stop-at-rest rule: "time_to_rest" is written
   double time_to_rest = -1.0;          // s; < 0: did not come to rest ("time_to_rest": null)
+  bool penetration_checked = false;    // the run checked every step end geometrically: "max_penetration_oracle"
+  double max_penetration_oracle = 0.0; // max over step ends of MaxPenetrationBound (step_health.h), m
   void Add(const StepReport& report, const Data& data);
   std::string ToJson() const;
 };

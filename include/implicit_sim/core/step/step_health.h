@@ -15,6 +15,16 @@ namespace implicit_sim {
 // bound. Uses the broad phase and its workspace in *data.
 bool FindInitialOverlap(const Model& model, const State& state, double tolerance, Data* data, std::string* detail);
 
+// An upper bound on the deepest overlap of two bodies of `state` (m), from the geometry alone (none of a step's
+// unknowns). Over the broad phase's candidate pairs: the closed-form signed distance where there is one (a primitive
+// on a half-space, two spheres); otherwise the least c(n) = support1(-n) + support2(n) over unit n found by descent
+// from the centre line with closed-form support points (how far body 1 must move along n to clear body 2: its
+// positive part bounds the depth from above for every n, a negative value is a separation), and, when that is still
+// above `tolerance`, also c(n) at the normals of both bodies at the distance oracle's closest points; the smallest of
+// these, at least 0. Every value is certified by a plane: none rests on the oracle's distance. Uses the broad phase and its
+// workspace in *data (a Data of its own: the stepper's warm start is not touched, but its broad-phase workspace is).
+double MaxPenetrationBound(const Model& model, const State& state, double tolerance, Data* data);
+
 // Tunnelling: an end-of-step solution z of the step from `start` in which a body has passed through another. The
 // end-of-step conditions alone allow it (a ball against the FAR face of a thin wall is a legal NCP solution), so each
 // pair of the problem is checked against the start of the step: its end-of-step separating plane (through a2, normal
