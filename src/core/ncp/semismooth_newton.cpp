@@ -106,6 +106,7 @@ NcpSummary SemismoothNewton::Solve(const NcpProblem& problem, const NewtonOption
   mode_ = NcpEvalMode();
   mode_.smoothing = smoothing;
   mode_.regularization = options.sparse_regularization;  // enters the Jacobian only, never Phi
+  mode_.project_multipliers = options.project_multipliers;
   Resize(problem.size());
   if (sparse_) lu_.ForgetPivots();  // a solve depends on its inputs only
   Evaluate(problem, *z, true);

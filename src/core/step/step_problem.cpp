@@ -405,11 +405,10 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
   // without touching. The LM step of the dense solver copes; for the sparse LU the rows use sigma + max(d, 0) / h in
   // place of sigma (set_regular_separated_friction), which fixes s at a separated contact and is exactly the paper's
   // row at a touching one (d = 0).
-  // The rows take the slip speed as max(sigma, 0), equal at every solution (sigma >= 0): a negative iterate would
-  // make friction push along the slip (the wrong branch, between which and the right one Newton then alternates) or,
-  // at sigma = -d / h, leave s undetermined.
-  // (The raw rows keep sigma: Ipopt bounds it below by 0.)
-  const bool clamp = !eval_.mode.raw && sigma < 0.0;
+  // With NcpEvalMode::project_multipliers the rows take the slip speed as max(sigma, 0), equal at every solution: a
+  // negative iterate would make friction push along the slip (the wrong branch, between which and the right one
+  // Newton then alternates in a landing pile) or, at sigma = -d / h, leave s undetermined.
+  const bool clamp = eval_.mode.project_multipliers && !eval_.mode.raw && sigma < 0.0;
   const double slip = clamp ? 0.0 : sigma;
   const double dslip_dsigma = clamp ? 0.0 : 1.0;
   const double sigma_eff = regular_separated_friction_ ? slip + std::max(d, 0.0) / h_ : slip;

@@ -204,6 +204,7 @@ void StepIsland(void* context, int index) {
 // Adds an island's report to the step's: counts add up, residuals take the largest, the first island's fault wins.
 void MergeReport(const StepReport& island, StepReport* step) {
   step->converged = step->converged && island.converged;
+  step->projected_solves += island.projected_solves;
   step->cold_restarts += island.cold_restarts;
   step->smoothed_solves += island.smoothed_solves;
   step->ipopt_solves += island.ipopt_solves;

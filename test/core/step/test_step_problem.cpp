@@ -15,7 +15,10 @@ namespace {
 // Compares J with central differences of Phi column by column; reports the worst block by name. In sparse mode the
 // Jacobian comes from the sparse assembly (second evaluation: the recorded pattern replayed) with the friction rows
 // of the sparse solver (set_regular_separated_friction), and the dense Jacobian must equal it entry for entry.
-void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, bool sparse = false) {
+void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, bool sparse = false,
+                                            bool projected = false) {
+  NcpEvalMode mode;
+  mode.project_multipliers = projected;
   StepProblem problem(model);
   problem.set_regular_separated_friction(sparse);
   std::mt19937 rng(seed);
@@ -33,12 +36,12 @@ void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, b
 
   Eigen::VectorXd Phi, Phi_plus, Phi_minus;
   Eigen::MatrixXd J;
-  problem.Evaluate(z, NcpEvalMode(), &Phi, &J);
+  problem.Evaluate(z, mode, &Phi, &J);
   if (sparse) {
     SparseJacobian J_sparse;
     Eigen::VectorXd Phi_sparse;
-    problem.EvaluateSparse(z + Eigen::VectorXd::Constant(z.size(), 0.01), NcpEvalMode(), &Phi_sparse, &J_sparse);  // records
-    problem.EvaluateSparse(z, NcpEvalMode(), &Phi_sparse, &J_sparse);                                              // replays
+    problem.EvaluateSparse(z + Eigen::VectorXd::Constant(z.size(), 0.01), mode, &Phi_sparse, &J_sparse);  // records
+    problem.EvaluateSparse(z, mode, &Phi_sparse, &J_sparse);                                              // replays
     EXPECT_EQ((Phi_sparse - Phi).lpNorm<Eigen::Infinity>(), 0.0);
     EXPECT_EQ((Eigen::MatrixXd(J_sparse.matrix) - J).lpNorm<Eigen::Infinity>(), 0.0);
     J = Eigen::MatrixXd(J_sparse.matrix);
@@ -50,8 +53,8 @@ void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, b
     Eigen::VectorXd zp = z, zm = z;
     zp[col] += eps;
     zm[col] -= eps;
-    problem.Evaluate(zp, NcpEvalMode(), &Phi_plus, nullptr);
-    problem.Evaluate(zm, NcpEvalMode(), &Phi_minus, nullptr);
+    problem.Evaluate(zp, mode, &Phi_plus, nullptr);
+    problem.Evaluate(zm, mode, &Phi_minus, nullptr);
     const Eigen::VectorXd fd = (Phi_plus - Phi_minus) / (2.0 * eps);
     for (int row = 0; row < z.size(); ++row) {
       const double err = std::abs(fd[row] - J(row, col)) / std::max(1.0, std::abs(fd[row]));
@@ -87,14 +90,21 @@ TEST(StepProblemJacobian, JointsOfEveryTypeWithLimitsFrictionAndDamping) {
   ExpectJacobianMatchesFiniteDifferences(test_models::JointedRobot(), 9, true);
 }
 
+// Projected multipliers (the retry ladder's rung 1b): the friction rows' slip speed max(sigma, 0), whose derivative
+// is 0 where the random point has sigma < 0.
+TEST(StepProblemJacobian, ProjectedMultipliers) {
+  ExpectJacobianMatchesFiniteDifferences(test_models::SphereOnTwoSpheres(), 14, true, true);
+  ExpectJacobianMatchesFiniteDifferences(test_models::BoxAndSuperellipsoid(), 15, false, true);
+}
+
 TEST(StepProblemJacobian, SparseAssemblyWithSeparatedFrictionRows) {
   ExpectJacobianMatchesFiniteDifferences(test_models::SphereOnTwoSpheres(), 5, true);
   ExpectJacobianMatchesFiniteDifferences(test_models::BoxAndSuperellipsoid(), 6, true);
   ExpectJacobianMatchesFiniteDifferences(test_models::PrismOnGround(7), 7, true);
 }
 
-// The friction rows take the slip speed as max(sigma, 0) (a negative iterate would make friction push along the slip);
-// the raw rows, which Ipopt and the independent NCP check read, keep sigma itself.
+// With projected multipliers the friction rows take the slip speed as max(sigma, 0) (a negative iterate would make
+// friction push along the slip); the plain rows and the raw rows (Ipopt's, the independent NCP check's) keep sigma.
 TEST(StepProblem, FrictionRowsClampANegativeSlipSpeedButRawRowsDoNot) {
   const Model model = test_models::SphereOnTwoSpheres();
   StepProblem problem(model);
@@ -109,11 +119,16 @@ TEST(StepProblem, FrictionRowsClampANegativeSlipSpeedButRawRowsDoNot) {
   Eigen::VectorXd at_zero = z, negative = z, Phi_zero, Phi_negative;
   at_zero[blk.sigma()] = 0.0;
   negative[blk.sigma()] = -0.3;
-  problem.Evaluate(at_zero, NcpEvalMode(), &Phi_zero, nullptr);
-  problem.Evaluate(negative, NcpEvalMode(), &Phi_negative, nullptr);
+  NcpEvalMode projected;
+  projected.project_multipliers = true;
+  problem.Evaluate(at_zero, projected, &Phi_zero, nullptr);
+  problem.Evaluate(negative, projected, &Phi_negative, nullptr);
   EXPECT_EQ(Phi_zero[friction_row], Phi_negative[friction_row]);
+  problem.Evaluate(negative, NcpEvalMode(), &Phi_negative, nullptr);  // plain rows: sigma itself
+  EXPECT_NEAR(Phi_negative[friction_row] - Phi_zero[friction_row], -0.3 * z[friction_row], 1e-12);
   NcpEvalMode raw;
   raw.raw = true;
+  raw.project_multipliers = true;
   problem.Evaluate(at_zero, raw, &Phi_zero, nullptr);
   problem.Evaluate(negative, raw, &Phi_negative, nullptr);
   EXPECT_NEAR(Phi_negative[friction_row] - Phi_zero[friction_row], -0.3 * z[friction_row], 1e-12);

@@ -23,6 +23,10 @@ struct NcpEvalMode {
   // A proximal term delta >= 0 that the problem may add to the Jacobian's diagonal entries of rows it chooses
   // (never to Phi), to keep the Newton matrix regular where the problem is degenerate.
   double regularization = 0.0;
+  // Projected multipliers: the problem's equation rows may read a complementarity unknown at max(z_i, 0), its value
+  // at every solution, so that an iterate with a negative multiplier does not act with the wrong sign (the step's
+  // friction rows, step_problem.h). The complementarity rows and the raw rows keep z_i.
+  bool project_multipliers = false;
 };
 
 // A Jacobian in compressed sparse columns. Its pattern is recorded by the first evaluation after the problem's

@@ -32,6 +32,8 @@ struct NewtonOptions {
   double sparse_regularization = 1e-9;  // delta (see above)
   // The line search accepts a step that decreases the largest of the last this many merits (1: monotone), [1, 16].
   int line_search_memory = 10;
+  // NcpEvalMode::project_multipliers for this solve (the retry ladder's rung 1b sets it).
+  bool project_multipliers = false;
   // The allowed ranges are those of the step's options table (step/options.h), which validates these fields.
 };
 

@@ -21,6 +21,7 @@ const char* StepFaultName(StepFault fault);  // "none", "not_converged", "no_fin
 struct StepReport {
   bool converged = false;       // the NCP (every sub-step's, if the step was split) was solved to tolerance
   bool advanced = false;        // the state was advanced (false only when no finite solution was found)
+  int projected_solves = 0;     // solves whose warm start failed and that were retried with projected multipliers
   int cold_restarts = 0;        // solves whose warm start failed and that were retried from a cold start
   int smoothed_solves = 0;      // solves that went on to a smoothing continuation after the cold start failed
   int ipopt_solves = 0;         // Ipopt solves (the primary solver, or the ladder rung after the continuation)
