@@ -1,9 +1,10 @@
 // The retry ladder of one step solve: what the stepper tries, in order, until the step NCP is solved.
 //   1. warm start: the previous step's solution carried over the step (seeding.h), by the primary solver;
+//   1b. the same start by Newton with projected multipliers (ncp_problem.h; StepperOptions::projected_warm_retry);
 //   2. cold start: fresh closest points, normals and friction seeds;
 //   3. smoothing continuation: Newton on the Fischer-Burmeister functions smoothed by mu = 1e-2, 1e-3, ... 1e-8, each
 //      from the last, then on the exact problem;
-//   4. Ipopt on the complementarity-penalty NLP (ncp/ipopt_ncp.h) from the better of rungs 1-2, polished by Newton.
+//   4. Ipopt on the complementarity-penalty NLP (ncp/ipopt_ncp.h) from the best of rungs 1-2, polished by Newton.
 // Without a warm start the ladder begins at rung 2. With the Ipopt solver as the primary one it stops after rung 2.
 // When every rung fails the best finite iterate is kept; the stepper then splits the step (time_stepper.h).
 #pragma once
