@@ -110,7 +110,7 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
   island->z_best = island->z;  // the failed warm attempt (or the projected one, if better)
   // Rung 1b: the warm start again with projected multipliers (ncp_problem.h): it rescues failed warm starts where
   // Newton alternates between the two branches of a loaded contact's friction (a landing pile, a rolling polygon).
-  if (options.solver == StepperOptions::Solver::kNewton && options.projected_warm_retry) {
+  if (options.solver == StepperOptions::Solver::kNewton && options.projected_retries) {
     report->projected_solves++;
     const NcpSummary projected = SolveProjected(options, island, report);
     if (projected.converged) return projected;
@@ -119,12 +119,15 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
       island->z_best = island->z;
     }
   }
+  // The later rungs keep the projection too: they start where the plain rows failed.
+  StepperOptions later_options = options;
+  later_options.newton.project_multipliers = options.projected_retries;
   // Rung 2: a cold start, keeping the failed warm attempt and its tangent axes.
   report->cold_restarts++;
   island->axes_warm_failed = problem.tangent_axes();
   SeedColdStart(model, state, &problem, &island->z_start);
-  const NcpSummary cold = SolveFromStart(options, island, report);
-  if (cold.converged || options.solver == StepperOptions::Solver::kIpopt) return cold;
+  const NcpSummary cold = SolveFromStart(later_options, island, report);
+  if (cold.converged || later_options.solver == StepperOptions::Solver::kIpopt) return cold;
   // The better of the two (with its tangent axes) is kept in z_best, and the Ipopt rung starts from it.
   BestAttempt best(cold);
   if (!(cold.residual < warm.residual) && std::isfinite(warm.residual)) {
@@ -135,9 +138,9 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
   }
   island->z_start = island->z_best;
   NcpSummary summary;
-  if (SmoothingContinuation(options, island, report, &best, &summary)) return summary;
+  if (SmoothingContinuation(later_options, island, report, &best, &summary)) return summary;
   if ((last_chance || problem.size() <= kIpoptFirstSizeLimit) &&
-      IpoptThenNewton(options, island, report, &best, &summary)) {
+      IpoptThenNewton(later_options, island, report, &best, &summary)) {
     return summary;
   }
   island->z = island->z_best;

@@ -18,8 +18,8 @@ struct StepperOptions {
   Solver solver = Solver::kNewton;  // the primary solver; Newton's retry ladder also tries Ipopt
   NewtonOptions newton;
   int ipopt_max_iterations = 500; // [1, 100000]
-  // Retry a failed warm start with projected multipliers (retry_ladder.h, rung 1b), 0 or 1.
-  bool projected_warm_retry = true;
+  // Every rung after the plain warm start solves with projected multipliers (retry_ladder.h, rung 1b on), 0 or 1.
+  bool projected_retries = true;
   double contact_threshold = 1e-9;  // a pair counts as an active contact when its normal force exceeds this (N)
   // Broad phase (when Data uses one): a pair enters the NCP when the bounding spheres of its bodies, each grown by the
   // motion possible within the step (h |v| + h |w| |offset| + |g| h^2 / 2) plus this margin, overlap. (m, [0, 10])

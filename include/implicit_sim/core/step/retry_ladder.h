@@ -1,6 +1,7 @@
 // The retry ladder of one step solve: what the stepper tries, in order, until the step NCP is solved.
 //   1. warm start: the previous step's solution carried over the step (seeding.h), by the primary solver;
-//   1b. the same start by Newton with projected multipliers (ncp_problem.h; StepperOptions::projected_warm_retry);
+//   1b. the same start by Newton with projected multipliers (ncp_problem.h; with StepperOptions::projected_retries,
+//       the default, this rung and every later Newton solve project);
 //   2. cold start: fresh closest points, normals and friction seeds;
 //   3. smoothing continuation: Newton on the Fischer-Burmeister functions smoothed by mu = 1e-2, 1e-3, ... 1e-8, each
 //      from the last, then on the exact problem;
