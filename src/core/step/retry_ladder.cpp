@@ -27,17 +27,6 @@ NcpSummary SolveFromStart(const StepperOptions& options, IslandSolve* island, St
   return summary;
 }
 
-// Newton with projected multipliers from island->z_start; the solution goes to island->z.
-NcpSummary SolveProjected(const StepperOptions& options, IslandSolve* island, StepReport* report) {
-  NewtonOptions newton = options.newton;
-  newton.project_multipliers = true;
-  island->z = island->z_start;
-  const NcpSummary summary = island->solver().Solve(island->problem, newton, &island->z);
-  report->iterations += summary.iterations;
-  report->residual_evaluations += summary.residual_evaluations;
-  return summary;
-}
-
 // The best attempt of the rungs after the cold start: its summary, with its iterate in island->z_best.
 class BestAttempt {
  public:
@@ -108,20 +97,20 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
   NcpSummary warm = SolveFromStart(options, island, report);
   if (warm.converged) return warm;
   island->z_best = island->z;  // the failed warm attempt (or the projected one, if better)
+  // Every rung from here on projects the multipliers (with projected_retries): they start where the plain rows failed.
+  StepperOptions later_options = options;
+  later_options.newton.project_multipliers = options.projected_retries;
   // Rung 1b: the warm start again with projected multipliers (ncp_problem.h): it rescues failed warm starts where
   // Newton alternates between the two branches of a loaded contact's friction (a landing pile, a rolling polygon).
   if (options.solver == StepperOptions::Solver::kNewton && options.projected_retries) {
     report->projected_solves++;
-    const NcpSummary projected = SolveProjected(options, island, report);
+    const NcpSummary projected = SolveFromStart(later_options, island, report);
     if (projected.converged) return projected;
     if (projected.residual < warm.residual || !std::isfinite(warm.residual)) {
       warm = projected;
       island->z_best = island->z;
     }
   }
-  // The later rungs keep the projection too: they start where the plain rows failed.
-  StepperOptions later_options = options;
-  later_options.newton.project_multipliers = options.projected_retries;
   // Rung 2: a cold start, keeping the failed warm attempt and its tangent axes.
   report->cold_restarts++;
   island->axes_warm_failed = problem.tangent_axes();
