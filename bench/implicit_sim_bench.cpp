@@ -140,7 +140,8 @@ void DumpWorstSteps(const Case& c, const std::string& urdf, const std::string& s
 }
 
 // Runs one case and prints its JSON line.
-void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const DumpRequest& dump) {
+void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const DumpRequest& dump,
+         const std::vector<std::pair<const OptionRow*, double>>& overrides) {
   const std::string scene_path = scenes_dir + "/" + c.scene_file;
   const std::string scene_name =  // as LoadSceneFromFile names it: the file name without ".urdf"
       c.scenario == "S1" ? "s1_" + c.variant : c.scene_file.substr(0, c.scene_file.size() - 5);
@@ -150,6 +151,7 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const 
   const Model model = c.scenario == "S1" ? LoadSceneFromString(urdf, scene_name) : LoadSceneFromFile(scene_path);
   StepperOptions options;
   options.h = c.h;
+  for (const auto& [row, value] : overrides) row->set(&options, value);
   Data data(model);
   State state = State::Initial(model);
   ScenarioMetrics metrics(c.scenario, KineticEnergy(model, state));  // accuracy of the paper scenes
@@ -262,9 +264,25 @@ void ParseDumpRequest(const std::map<std::string, std::string>& values, int argc
 int main(int argc, char** argv) {
   const char* usage =
       "usage: implicit_sim_bench [--scenario P1|P2|P3|S1] [--shape sphere|ellipsoid] [--n N] [--seed S] "
-      "[--duration T] [--dt H] [--max-wall S] [--scenes-dir DIR] [--dump-worst K --dump-dir DIR]";
+      "[--duration T] [--dt H] [--max-wall S] [--scenes-dir DIR] [--dump-worst K --dump-dir DIR] [--set FIELD=VALUE]...";
   std::map<std::string, std::string> values;
+  std::vector<std::pair<const OptionRow*, double>> overrides;  // --set, in the order given
   for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--set" && i + 1 < argc) {
+      const std::string text = argv[++i];
+      const size_t eq = text.find('=');
+      const OptionRow* row = eq == std::string::npos ? nullptr : FindOptionByField(text.substr(0, eq));
+      double value = 0.0;
+      std::string error = "--set takes FIELD=VALUE with a field of the options table other than h (use --dt), got '" +
+                          text + "'";
+      if (!row || text.substr(0, eq) == "h" ||
+          !ParseOptionValue(*row, text.substr(eq + 1), "--set " + text.substr(0, eq), &value, &error)) {
+        std::cerr << "implicit_sim_bench: " << error << "\n" << usage << "\n";
+        return 2;
+      }
+      overrides.emplace_back(row, value);
+      continue;
+    }
     if (std::string(argv[i]) == "--variant" && i + 1 < argc) {  // a P case by its variant (AllCases), e.g. p1_ngon100
       values["--variant"] = argv[++i];
       continue;
@@ -337,7 +355,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    for (const Case& c : cases) Run(c, scenes_dir, max_wall_s, dump);
+    for (const Case& c : cases) Run(c, scenes_dir, max_wall_s, dump, overrides);
   } catch (const std::exception& e) {
     std::cerr << "implicit_sim_bench: " << e.what() << "\n";
     return 1;

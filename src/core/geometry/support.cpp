@@ -1,6 +1,8 @@
 #include "implicit_sim/core/geometry/support.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace implicit_sim {
 namespace {
@@ -98,10 +100,58 @@ bool ClosedFormClosestPoints(const ConvexShape& shape1, const Pose& X_WB1, const
   return true;
 }
 
+CrossingDescent DescendCrossing(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2,
+                                const Pose& X_WB2, double stop_below, int max_steps) {
+  CrossingDescent d;
+  // c(n) and its gradient in n, p2(n) - p1(-n), into `at`.
+  const auto evaluate = [&](const Vec3& n_W, CrossingDescent* at) {
+    at->n_W = n_W;
+    const bool ok = SupportPoint(shape1, X_WB1, -n_W, &at->p_W1) && SupportPoint(shape2, X_WB2, n_W, &at->p_W2);
+    at->value = ok ? n_W.dot(at->p_W2 - at->p_W1) : std::numeric_limits<double>::infinity();
+  };
+  const Vec3 line_W = X_WB1 * shape1.X_BS.translation() - X_WB2 * shape2.X_BS.translation();
+  evaluate(line_W.norm() > 0.0 ? Vec3(line_W.normalized()) : Vec3::UnitZ(), &d);
+  const double first_step = 1.0 / (shape1.BoundingRadius() + shape2.BoundingRadius());  // rad per m of gradient
+  double step = first_step;
+  CrossingDescent trial;
+  for (int k = 0; k < max_steps && std::isfinite(d.value) && d.value >= stop_below; ++k) {
+    const Vec3 gradient_W = d.p_W2 - d.p_W1;
+    const Vec3 tangential_W = gradient_W - gradient_W.dot(d.n_W) * d.n_W;
+    // Stationary, or stalled by rounding (c no longer decreases along the gradient) close to it.
+    if (tangential_W.norm() <= 1e-9 || (step < 1e-12 * first_step && tangential_W.norm() <= 1e-7)) {
+      d.stationary = true;
+      break;
+    }
+    evaluate((d.n_W - step * tangential_W).normalized(), &trial);
+    if (trial.value < d.value) {
+      d = trial;
+      step *= 1.5;  // a step that lowers c is lengthened, one that does not is halved
+    } else {
+      step *= 0.5;
+    }
+  }
+  return d;
+}
+
 ClosestPointsResult FindClosestPoints(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2,
                                       const Pose& X_WB2) {
   ClosestPointsResult result;
   if (ClosedFormClosestPoints(shape1, X_WB1, shape2, X_WB2, &result)) return result;
+  // Strictly convex with a Lipschitz support map: the descent converges (a superellipsoid's support map is not
+  // Lipschitz where a coordinate of A u vanishes, and a box's or a cylinder's is not unique).
+  const auto smooth = [](const ConvexShape& shape) {
+    return shape.type == ShapeType::kSphere || shape.type == ShapeType::kEllipsoid;
+  };
+  if (smooth(shape1) && smooth(shape2)) {
+    const CrossingDescent d = DescendCrossing(shape1, X_WB1, shape2, X_WB2, -std::numeric_limits<double>::infinity(), 1000);
+    if (d.stationary) {
+      result.solved = true;
+      result.distance = std::max(0.0, -d.value);
+      result.p_W1 = d.p_W1;
+      result.p_W2 = d.p_W2;
+      return result;
+    }
+  }
   return ComputeClosestPoints(shape1, X_WB1, shape2, X_WB2);
 }
 

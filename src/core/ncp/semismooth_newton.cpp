@@ -105,10 +105,15 @@ NcpSummary SemismoothNewton::Solve(const NcpProblem& problem, const NewtonOption
   summary_ = &summary;
   mode_ = NcpEvalMode();
   mode_.smoothing = smoothing;
-  mode_.regularization = options.sparse_regularization;  // enters the Jacobian only, never Phi
   mode_.project_multipliers = options.project_multipliers;
   Resize(problem.size());
   if (sparse_) lu_.ForgetPivots();  // a solve depends on its inputs only
+  // delta enters the Jacobian only, never Phi; the first one from the residual at the start.
+  mode_.regularization = options.sparse_regularization;
+  if (options.residual_regularization > 0.0) {
+    Evaluate(problem, *z, false);
+    mode_.regularization += options.residual_regularization * Phi_.norm();
+  }
   Evaluate(problem, *z, true);
   double merit = 0.5 * Phi_.squaredNorm();
   history_count_ = history_next_ = 0;
@@ -138,6 +143,8 @@ NcpSummary SemismoothNewton::Solve(const NcpProblem& problem, const NewtonOption
       break;
     }
     z->swap(z_trial_);
+    // The new Jacobian's delta from the last residual (Phi and J come from one evaluation).
+    mode_.regularization = options.sparse_regularization + options.residual_regularization * std::sqrt(2.0 * merit);
     Evaluate(problem, *z, true);
     merit = 0.5 * Phi_.squaredNorm();
   }

@@ -12,30 +12,6 @@
 namespace implicit_sim {
 namespace {
 
-// An upper bound on how deep the two bodies of `pair` overlap (m): 0 when their closest points are more than
-// `tolerance` apart; otherwise the crossing of the plane through the contact point on body 2's outward normal
-// (distance_oracle.h), which is positive whenever they overlap, since then no plane separates them. (The oracle
-// reports overlapping bodies at a distance of about its own tolerance, not 0.)
-double OverlapBound(const Model& model, const State& state, const ContactPair& pair, double tolerance) {
-  const Body& body1 = model.bodies[pair.body1];
-  const Body& body2 = model.bodies[pair.body2];
-  const Pose X_WB1 = state.X_WB(model, pair.body1), X_WB2 = state.X_WB(model, pair.body2);
-  const ClosestPointsResult cp = FindClosestPoints(body1.shape, X_WB1, body2.shape, X_WB2);
-  if (cp.solved && cp.distance > tolerance) return 0.0;
-  Vec3 normal_W = Vec3::UnitZ();
-  double grad_norm;
-  MostActiveInequality(body2.shape, X_WB2, cp.p_W2, &normal_W, &grad_norm);
-  // The bound of PenetrationBound through p_W2 on normal_W, with closed-form support points where the shape has them
-  // (the oracle's support value solves an NLP, about 10 ms, except for a single half-space).
-  const auto support = [](const ConvexShape& shape, const Pose& X_WB, const Vec3& u_W) {
-    Vec3 p_W;
-    return SupportPoint(shape, X_WB, u_W, &p_W) ? u_W.dot(p_W) : SupportValue(shape, X_WB, u_W);
-  };
-  const auto support1 = [&](const Vec3& u_W) { return support(body1.shape, X_WB1, u_W); };
-  const auto support2 = [&](const Vec3& u_W) { return support(body2.shape, X_WB2, u_W); };
-  return PlaneCrossingBound(support1, support2, cp.p_W2, normal_W);
-}
-
 // The broad phase's candidate pairs of `state` (bounding volumes without inflation) into data->candidates.
 void FindCandidates(const Model& model, const State& state, Data* data) {
   for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
@@ -59,39 +35,6 @@ double CrossingAlong(const ConvexShape& shape1, const Pose& X_WB1, const ConvexS
   return Support(shape1, X_WB1, -n_W) + Support(shape2, X_WB2, n_W);
 }
 
-// The least support1(-n) + support2(n) over unit n (m) found by projected-gradient descent from the centre line,
-// with closed-form support points only (+inf when a shape has none). The gradient in n is p2(n) - p1(-n), the two
-// support points; a step that does not lower the value is halved. Stops once the value is below -tolerance (a
-// separation), at a stationary n (tangential gradient below 1e-9 m) or after 200 steps.
-double DescendCrossing(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2, const Pose& X_WB2,
-                       double tolerance) {
-  const auto evaluate = [&](const Vec3& n_W, Vec3* gradient_W) {
-    Vec3 p1_W, p2_W;
-    if (!SupportPoint(shape1, X_WB1, -n_W, &p1_W) || !SupportPoint(shape2, X_WB2, n_W, &p2_W)) {
-      return std::numeric_limits<double>::infinity();
-    }
-    *gradient_W = p2_W - p1_W;
-    return n_W.dot(*gradient_W);
-  };
-  const Vec3 line_W = X_WB1 * shape1.X_BS.translation() - X_WB2 * shape2.X_BS.translation();
-  Vec3 n_W = line_W.norm() > 0.0 ? Vec3(line_W.normalized()) : Vec3::UnitZ(), gradient_W;
-  double value = evaluate(n_W, &gradient_W);
-  double step = 1.0 / (shape1.BoundingRadius() + shape2.BoundingRadius());  // rad per m of gradient
-  for (int k = 0; k < 200 && std::isfinite(value) && value >= -tolerance; ++k) {
-    const Vec3 tangential_W = gradient_W - gradient_W.dot(n_W) * n_W;
-    if (tangential_W.norm() <= 1e-9) break;
-    const Vec3 trial_W = (n_W - step * tangential_W).normalized();
-    Vec3 trial_gradient_W;
-    const double trial = evaluate(trial_W, &trial_gradient_W);
-    if (trial < value) {
-      n_W = trial_W, value = trial, gradient_W = trial_gradient_W;
-    } else {
-      step *= 0.5;
-    }
-  }
-  return value;
-}
-
 // c(n) at the normals of both bodies at the distance oracle's closest points, the smaller (m). The oracle's distance
 // alone does not decide: it reports overlapping bodies at about its own tolerance, not 0; for bodies it finds apart
 // the normals give about minus their distance.
@@ -112,7 +55,7 @@ double PairPenetrationBound(const Model& model, const State& state, const Contac
   const Pose X_WB1 = state.X_WB(model, pair.body1), X_WB2 = state.X_WB(model, pair.body2);
   ClosestPointsResult cp;
   if (ClosedFormClosestPoints(shape1, X_WB1, shape2, X_WB2, &cp)) return std::max(0.0, -cp.distance);
-  const double descent = DescendCrossing(shape1, X_WB1, shape2, X_WB2, tolerance);
+  const double descent = DescendCrossing(shape1, X_WB1, shape2, X_WB2, -tolerance, 200).value;
   if (descent <= tolerance) return std::max(0.0, descent);
   return std::max(0.0, std::min(descent, OracleCrossing(shape1, X_WB1, shape2, X_WB2)));
 }
@@ -131,7 +74,7 @@ double MaxPenetrationBound(const Model& model, const State& state, double tolera
 bool FindInitialOverlap(const Model& model, const State& state, double tolerance, Data* data, std::string* detail) {
   FindCandidates(model, state, data);
   for (int p : data->candidates) {
-    const double depth = OverlapBound(model, state, model.pairs[p], tolerance);
+    const double depth = PairPenetrationBound(model, state, model.pairs[p], tolerance);
     if (depth > tolerance) {
       *detail = "pair '" + model.PairName(p) + "' overlaps by up to " + FormatNumber(depth) + " m at t = " +
                 FormatNumber(state.t) + " s (overlap_tolerance " + FormatNumber(tolerance) + " m)";

@@ -30,6 +30,9 @@ struct NewtonOptions {
   double armijo = 1e-4;           // sufficient decrease factor
   double min_step = 1e-10;        // smallest line-search step length
   double sparse_regularization = 1e-9;  // delta (see above)
+  // delta grows with the residual: delta_k = sparse_regularization + residual_regularization |Phi(z_k)|_2, so it
+  // vanishes at the solution (a regularized semismooth Newton; 0: a constant delta).
+  double residual_regularization = 0.0;
   // The line search accepts a step that decreases the largest of the last this many merits (1: monotone), [1, 16].
   int line_search_memory = 10;
   // NcpEvalMode::project_multipliers for this solve (the retry ladder's rung 1b sets it).

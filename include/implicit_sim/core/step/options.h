@@ -63,7 +63,7 @@ struct OptionRow {
   void (*set)(StepperOptions* options, double value);
 };
 
-constexpr int kNumOptionRows = 17;
+constexpr int kNumOptionRows = 18;
 const std::array<OptionRow, kNumOptionRows>& OptionTable();
 
 // The row with this field, ROS parameter or runner flag; nullptr when none (an empty name finds nothing).

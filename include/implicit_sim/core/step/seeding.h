@@ -20,8 +20,9 @@ namespace implicit_sim {
 ClosestPointsResult QuickClosestPoints(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2,
                                        const Pose& X_WB2);
 
-// Fills the contact block c of z from closest points at the configuration `state` (closed form, or with use_oracle
-// the distance oracle; otherwise QuickClosestPoints) for a cold start, with multipliers consistent with the normal
+// Fills the contact block c of z from closest points at the configuration `state` (with use_oracle FindClosestPoints:
+// a closed form, the support-function descent for spheres and ellipsoids, else the Ipopt oracle; otherwise
+// QuickClosestPoints) for a cold start, with multipliers consistent with the normal
 // and a normal force guess.
 void SeedPair(const Model& model, const State& state, int c, const StepProblem& problem, Eigen::VectorXd* z,
               bool use_oracle = true);

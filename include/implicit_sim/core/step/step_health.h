@@ -11,8 +11,9 @@
 namespace implicit_sim {
 
 // True if two bodies of `state` overlap by more than `tolerance` (m); *detail then names the pair and the depth.
-// Candidates come from the broad phase (bounding spheres), the depth from the closest points and a separating-plane
-// bound. Uses the broad phase and its workspace in *data.
+// Candidates come from the broad phase (bounding spheres), the depth is the certified bound of MaxPenetrationBound
+// (closed forms and support-function descent first: the Ipopt oracle only where those do not settle it). Uses the
+// broad phase and its workspace in *data.
 bool FindInitialOverlap(const Model& model, const State& state, double tolerance, Data* data, std::string* detail);
 
 // An upper bound on the deepest overlap of two bodies of `state` (m), from the geometry alone (none of a step's
