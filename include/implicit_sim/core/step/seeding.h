@@ -15,8 +15,9 @@
 namespace implicit_sim {
 
 // Closest points without the oracle, for a pair entering the NCP through the broad phase (apart by about the
-// margin): the closed form where there is one, otherwise the support points of both bodies along the line of their
-// shape origins (exact for spheres, a fair guess for convex bodies near each other).
+// margin): the closed form where there is one; for an ellipsoid and a sphere or an ellipsoid the support-function
+// descent (geometry/support.h, microseconds); otherwise the support points of both bodies along the line of their
+// shape origins (a fair guess for convex bodies near each other).
 ClosestPointsResult QuickClosestPoints(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2,
                                        const Pose& X_WB2);
 
