@@ -191,6 +191,7 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const 
       Field("nonconverged_steps", std::to_string(summary.nonconverged_steps)),
       Field("cold_restarts", std::to_string(summary.cold_restarts)),
       Field("smoothed_solves", std::to_string(summary.smoothed_solves)),
+      Field("proximal_solves", std::to_string(summary.proximal_solves)),
       Field("ipopt_solves", std::to_string(summary.ipopt_solves)),
       Field("substeps", std::to_string(summary.substeps)),
       Field("crossings", std::to_string(summary.crossings)),

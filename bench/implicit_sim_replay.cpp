@@ -137,7 +137,8 @@ void ReplayOne(const std::string& path, const Arguments& arguments, Totals* tota
             << ", \"residual_evaluations\": " << report.residual_evaluations << ", \"rung\": "
             << Quoted(HighestRung(report, step_case.inputs.warm_start.valid))
             << ", \"projected_solves\": " << report.projected_solves
-            << ", \"cold_restarts\": " << report.cold_restarts << ", \"smoothed_solves\": " << report.smoothed_solves
+            << ", \"cold_restarts\": " << report.cold_restarts << ", \"proximal_solves\": " << report.proximal_solves
+            << ", \"smoothed_solves\": " << report.smoothed_solves
             << ", \"ipopt_solves\": " << report.ipopt_solves << ", \"substeps\": " << report.substeps
             << ", \"crossings\": " << report.crossings << ", \"residual\": " << Json(report.residual)
             << ", \"wall_us\": " << Json(median_us) << ", \"repeats\": " << repeat

@@ -17,6 +17,7 @@ void RunSummary::Add(const StepReport& report, const Data& data) {
   cold_restarts += report.cold_restarts;
   substeps += report.substeps;
   crossings += report.crossings;
+  proximal_solves += report.proximal_solves;
   smoothed_solves += report.smoothed_solves;
   ipopt_solves += report.ipopt_solves;
   broad_phase_additions += report.broad_phase_additions;
@@ -41,6 +42,7 @@ std::string RunSummary::ToJson() const {
   json += "  \"max_joint_angle_error\": " + FormatNumber(max_joint_angle_error) + ",\n";
   json += "  \"nonconverged_steps\": " + std::to_string(nonconverged_steps) + ",\n";
   json += "  \"cold_restarts\": " + std::to_string(cold_restarts) + ",\n";
+  json += "  \"proximal_solves\": " + std::to_string(proximal_solves) + ",\n";
   json += "  \"smoothed_solves\": " + std::to_string(smoothed_solves) + ",\n";
   json += "  \"ipopt_solves\": " + std::to_string(ipopt_solves) + ",\n";
   json += "  \"substeps\": " + std::to_string(substeps) + ",\n";

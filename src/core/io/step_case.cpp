@@ -140,6 +140,7 @@ std::string HighestRung(const StepReport& report, bool had_warm_start) {
   if (report.substeps > 0) return "substeps";
   if (report.ipopt_solves > 0) return "ipopt";
   if (report.smoothed_solves > 0) return "smoothing";
+  if (report.proximal_solves > 0) return "proximal";
   if (report.cold_restarts > 0 || !had_warm_start) return "cold";
   if (report.projected_solves > 0) return "projected";
   return "warm";

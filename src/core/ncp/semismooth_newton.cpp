@@ -106,6 +106,8 @@ NcpSummary SemismoothNewton::Solve(const NcpProblem& problem, const NewtonOption
   mode_ = NcpEvalMode();
   mode_.smoothing = smoothing;
   mode_.project_multipliers = options.project_multipliers;
+  mode_.proximal_weight = options.proximal_center ? options.proximal_weight : 0.0;
+  mode_.proximal_center = options.proximal_center;
   Resize(problem.size());
   if (sparse_) lu_.ForgetPivots();  // a solve depends on its inputs only
   // delta enters the Jacobian only, never Phi; the first one from the residual at the start.

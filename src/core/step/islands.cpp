@@ -35,6 +35,7 @@ void SizeWorkspace(IslandSolve* island) {
   island->z.setZero(n);
   island->z_start.setZero(n);
   island->z_best.setZero(n);
+  island->z_center.setZero(n);
   island->ncp_error_rows.setZero(n);
   for (Eigen::VectorXd& backup : island->z_backup) backup.setZero(n);
   island->contacts.resize(island->pairs.size());

@@ -52,8 +52,31 @@ bool NewtonPolish(const StepperOptions& options, IslandSolve* island, StepReport
   return summary->converged;
 }
 
+// Rung 2b: proximal point. Newton on the problem perturbed by the weight c (z - z_k) on the contact force and friction
+// rows (ncp_problem.h), each round from the last round's end z_k, with c = proximal_weight, / 10, ... down to 1e-6
+// m/s, then on the exact problem. Starts from island->z_start (the better of the warm and cold attempts).
+bool ProximalPoint(const StepperOptions& options, IslandSolve* island, StepReport* report, BestAttempt* best,
+                   NcpSummary* summary) {
+  report->proximal_solves++;
+  island->z = island->z_start;
+  NewtonOptions round = options.newton;
+  round.max_iterations = std::min(options.newton.max_iterations, 30);
+  round.proximal_center = &island->z_center;
+  for (double c = options.proximal_weight; c >= 1e-6 && island->z.allFinite(); c *= 0.1) {
+    island->z_center = island->z;
+    round.proximal_weight = c;
+    *summary = island->solver().Solve(island->problem, round, &island->z);
+    report->iterations += summary->iterations;
+    report->residual_evaluations += summary->residual_evaluations;
+  }
+  if (!island->z.allFinite()) return false;
+  if (NewtonPolish(options, island, report, summary)) return true;
+  best->Offer(*summary, island);
+  return false;
+}
+
 // Rung 3: Newton on the FB functions smoothed by mu = 1e-2, 1e-3, ..., 1e-8, each from the last, then exactly.
-// Starts from island->z as the cold start left it.
+// Starts from island->z as the cold start (or the proximal rung) left it.
 bool SmoothingContinuation(const StepperOptions& options, IslandSolve* island, StepReport* report, BestAttempt* best,
                            NcpSummary* summary) {
   report->smoothed_solves++;
@@ -127,6 +150,9 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
   }
   island->z_start = island->z_best;
   NcpSummary summary;
+  if (later_options.proximal_weight > 0.0 && ProximalPoint(later_options, island, report, &best, &summary)) {
+    return summary;
+  }
   if (SmoothingContinuation(later_options, island, report, &best, &summary)) return summary;
   if ((last_chance || problem.size() <= kIpoptFirstSizeLimit) &&
       IpoptThenNewton(later_options, island, report, &best, &summary)) {

@@ -417,6 +417,14 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
   (*Phi)[rt] = fr.e_t * t.dot(v_rel) + st * sigma_eff;
   (*Phi)[ro] = fr.e_o * o.dot(v_rel) + so * sigma_eff;
   (*Phi)[rr] = fr.e_r * n.dot(w_rel) + sr * sigma_eff;
+  // The proximal rung's term (ncp_problem.h) on the friction rows, weight cp in m/s per unit of s.
+  const double cp = eval_.mode.raw ? 0.0 : eval_.mode.proximal_weight;
+  if (cp > 0.0) {
+    const Eigen::VectorXd& center = *eval_.mode.proximal_center;
+    (*Phi)[rt] += cp * (st - center[off + pi::kSt]);
+    (*Phi)[ro] += cp * (so - center[off + pi::kSo]);
+    (*Phi)[rr] += cp * (sr - center[off + pi::kSr]);
+  }
   if (want_J) {
     add(rt, off + pi::kN, Eigen::RowVector3d(fr.e_t * v_rel.transpose() * dt_dn));
     add(ro, off + pi::kN, Eigen::RowVector3d(fr.e_o * v_rel.transpose() * do_dn));
@@ -426,9 +434,9 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
     if (e1.col >= 0) add(rr, e1.col + 3, Eigen::RowVector3d(fr.e_r * n.transpose()));
     if (e2.col >= 0) add(rr, e2.col + 3, Eigen::RowVector3d(-fr.e_r * n.transpose()));
     // The diagonal entries carry the sparse solver's proximal regularization (never Phi).
-    add1(rt, off + pi::kSt, sigma_eff + eval_.mode.regularization);
-    add1(ro, off + pi::kSo, sigma_eff + eval_.mode.regularization);
-    add1(rr, off + pi::kSr, sigma_eff + eval_.mode.regularization);
+    add1(rt, off + pi::kSt, sigma_eff + eval_.mode.regularization + cp);
+    add1(ro, off + pi::kSo, sigma_eff + eval_.mode.regularization + cp);
+    add1(rr, off + pi::kSr, sigma_eff + eval_.mode.regularization + cp);
     add1(rt, blk.sigma(), st * dslip_dsigma);
     add1(ro, blk.sigma(), so * dslip_dsigma);
     add1(rr, blk.sigma(), sr * dslip_dsigma);
@@ -438,10 +446,12 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
   }
 
   // Non-penetration (paper eq. 11 with the signed distance d as gap): ln / Fs _|_ d.
+  // With the proximal term the gap side reads d + cp h (ln - ln_c) / Fs (a velocity weight times the step: metres).
   const double Fs = force_scale_;
-  const FB fb_n = FischerBurmeister(ln / Fs, d, eval_.mode.smoothing, eval_.mode.raw);
+  const double proximal_gap = cp > 0.0 ? cp * h_ * (ln - (*eval_.mode.proximal_center)[blk.ln()]) / Fs : 0.0;
+  const FB fb_n = FischerBurmeister(ln / Fs, d + proximal_gap, eval_.mode.smoothing, eval_.mode.raw);
   (*Phi)[blk.ln()] = fb_n.value;
-  add1(blk.ln(), blk.ln(), (fb_n.da + eval_.mode.regularization) / Fs);
+  add1(blk.ln(), blk.ln(), (fb_n.da + eval_.mode.regularization + fb_n.db * cp * h_) / Fs);
   add1(blk.ln(), off + pi::kD, fb_n.db);
 
   // Friction ellipsoid (paper eq. 5 divided by (mu ln)^2): sigma _|_ 1 - s_t^2 - s_o^2 - s_r^2.

@@ -206,6 +206,7 @@ void MergeReport(const StepReport& island, StepReport* step) {
   step->converged = step->converged && island.converged;
   step->projected_solves += island.projected_solves;
   step->cold_restarts += island.cold_restarts;
+  step->proximal_solves += island.proximal_solves;
   step->smoothed_solves += island.smoothed_solves;
   step->ipopt_solves += island.ipopt_solves;
   step->substeps += island.substeps;

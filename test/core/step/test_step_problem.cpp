@@ -16,9 +16,10 @@ namespace {
 // Jacobian comes from the sparse assembly (second evaluation: the recorded pattern replayed) with the friction rows
 // of the sparse solver (set_regular_separated_friction), and the dense Jacobian must equal it entry for entry.
 void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, bool sparse = false,
-                                            bool projected = false) {
+                                            bool projected = false, double proximal_weight = 0.0) {
   NcpEvalMode mode;
   mode.project_multipliers = projected;
+  Eigen::VectorXd center;
   StepProblem problem(model);
   problem.set_regular_separated_friction(sparse);
   std::mt19937 rng(seed);
@@ -33,6 +34,11 @@ void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, b
   const Eigen::VectorXd wrench = Eigen::VectorXd::Constant(model.nv(), 0.3);
   problem.BeginStep(start, 0.05, &wrench);
   problem.ResetTangentAxes(z);
+  if (proximal_weight > 0.0) {  // a centre away from z
+    center = z + Eigen::VectorXd::Constant(z.size(), 0.2);
+    mode.proximal_weight = proximal_weight;
+    mode.proximal_center = &center;
+  }
 
   Eigen::VectorXd Phi, Phi_plus, Phi_minus;
   Eigen::MatrixXd J;
@@ -95,6 +101,53 @@ TEST(StepProblemJacobian, JointsOfEveryTypeWithLimitsFrictionAndDamping) {
 TEST(StepProblemJacobian, ProjectedMultipliers) {
   ExpectJacobianMatchesFiniteDifferences(test_models::SphereOnTwoSpheres(), 14, true, true);
   ExpectJacobianMatchesFiniteDifferences(test_models::BoxAndSuperellipsoid(), 15, false, true);
+}
+
+// The proximal rung's perturbed rows: c (s - s_c) on the friction rows, d + c h (ln - ln_c) / Fs in the normal row.
+TEST(StepProblemJacobian, ProximalTerm) {
+  ExpectJacobianMatchesFiniteDifferences(test_models::SphereOnTwoSpheres(), 16, false, false, 0.7);
+  ExpectJacobianMatchesFiniteDifferences(test_models::BoxAndSuperellipsoid(), 17, true, true, 3.0);
+}
+
+// The proximal term moves exactly the rows it names, by the closed-form amounts, and vanishes at the centre.
+TEST(StepProblem, ProximalTermPerturbsOnlyTheForceAndFrictionRows) {
+  const Model model = test_models::SphereOnTwoSpheres();
+  StepProblem problem(model);
+  problem.BeginStep(State::Initial(model), 0.01, nullptr);
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::VectorXd z(problem.size());
+  for (int i = 0; i < z.size(); ++i) z[i] = u(rng);
+  problem.ResetTangentAxes(z);
+  const PairBlock& blk = problem.blocks()[0];
+  z[blk.ln()] = 2.0 * problem.force_scale();  // a positive normal force and a large gap: FB is b there
+  z[blk.offset + pair_index::kD] = -0.5;
+  Eigen::VectorXd plain, perturbed, at_center;
+  problem.Evaluate(z, NcpEvalMode(), &plain, nullptr);
+  NcpEvalMode proximal;
+  proximal.proximal_weight = 2.0;
+  Eigen::VectorXd center = z;
+  proximal.proximal_center = &center;
+  problem.Evaluate(z, proximal, &at_center, nullptr);
+  EXPECT_EQ((at_center - plain).lpNorm<Eigen::Infinity>(), 0.0);  // no perturbation at the centre
+  center[blk.offset + pair_index::kSt] -= 0.1;
+  center[blk.ln()] -= 0.5 * problem.force_scale();
+  center[0] -= 1.0;  // a velocity: its row has no proximal term
+  problem.Evaluate(z, proximal, &perturbed, nullptr);
+  const Eigen::VectorXd change = perturbed - plain;
+  EXPECT_NEAR(change[blk.offset + pair_index::kSt], 2.0 * 0.1, 1e-12);
+  EXPECT_NE(change[blk.ln()], 0.0);
+  int changed = 0;
+  for (int i = 0; i < change.size(); ++i) changed += change[i] != 0.0;
+  EXPECT_EQ(changed, 2);
+  NcpEvalMode raw = proximal;  // the raw rows (the independent NCP check) never carry it
+  raw.raw = true;
+  Eigen::VectorXd raw_plain, raw_perturbed;
+  NcpEvalMode raw_only;
+  raw_only.raw = true;
+  problem.Evaluate(z, raw_only, &raw_plain, nullptr);
+  problem.Evaluate(z, raw, &raw_perturbed, nullptr);
+  EXPECT_EQ((raw_perturbed - raw_plain).lpNorm<Eigen::Infinity>(), 0.0);
 }
 
 TEST(StepProblemJacobian, SparseAssemblyWithSeparatedFrictionRows) {

@@ -28,6 +28,7 @@ struct RunSummary {
   double max_penetration = 0.0;        // max over steps and pairs of max(0, -gap) (m)
   int nonconverged_steps = 0;
   int cold_restarts = 0;
+  int proximal_solves = 0;             // solves that reached the proximal-point rung
   int smoothed_solves = 0;             // solves that reached the smoothing continuation
   int ipopt_solves = 0;                // Ipopt solves (primary solver or ladder rung)
   int substeps = 0;                    // step splits after failed solves

@@ -27,6 +27,11 @@ struct NcpEvalMode {
   // at every solution, so that an iterate with a negative multiplier does not act with the wrong sign (the step's
   // friction rows, step_problem.h). The complementarity rows and the raw rows keep z_i.
   bool project_multipliers = false;
+  // A proximal-point term (the retry ladder's proximal rung): the problem may add proximal_weight (z_i - c_i), with c
+  // = *proximal_center, to the function side of the rows it chooses (the step: its contact force and friction
+  // rows), so that the perturbed problem is better posed and its solution stays near c. 0: off.
+  double proximal_weight = 0.0;
+  const Eigen::VectorXd* proximal_center = nullptr;
 };
 
 // A Jacobian in compressed sparse columns. Its pattern is recorded by the first evaluation after the problem's

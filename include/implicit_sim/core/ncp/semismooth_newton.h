@@ -37,6 +37,9 @@ struct NewtonOptions {
   int line_search_memory = 10;
   // NcpEvalMode::project_multipliers for this solve (the retry ladder's rung 1b sets it).
   bool project_multipliers = false;
+  // NcpEvalMode::proximal_weight and proximal_center for this solve (the retry ladder's proximal rung; 0: off).
+  double proximal_weight = 0.0;
+  const Eigen::VectorXd* proximal_center = nullptr;
   // The allowed ranges are those of the step's options table (step/options.h), which validates these fields.
 };
 

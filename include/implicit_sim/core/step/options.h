@@ -20,6 +20,9 @@ struct StepperOptions {
   int ipopt_max_iterations = 500; // [1, 100000]
   // Every rung after the plain warm start solves with projected multipliers (retry_ladder.h, rung 1b on), 0 or 1.
   bool projected_retries = true;
+  // The proximal-point rung (retry_ladder.h) starts with this weight (m/s per unit multiplier) and divides it by 10
+  // each round; 0: no proximal rung. [0, 1000]
+  double proximal_weight = 0.0;
   double contact_threshold = 1e-9;  // a pair counts as an active contact when its normal force exceeds this (N)
   // Broad phase (when Data uses one): a pair enters the NCP when the bounding spheres of its bodies, each grown by the
   // motion possible within the step (h |v| + h |w| |offset| + |g| h^2 / 2) plus this margin, overlap. (m, [0, 10])
@@ -63,7 +66,7 @@ struct OptionRow {
   void (*set)(StepperOptions* options, double value);
 };
 
-constexpr int kNumOptionRows = 18;
+constexpr int kNumOptionRows = 19;
 const std::array<OptionRow, kNumOptionRows>& OptionTable();
 
 // The row with this field, ROS parameter or runner flag; nullptr when none (an empty name finds nothing).

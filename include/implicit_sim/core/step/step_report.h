@@ -23,6 +23,7 @@ struct StepReport {
   bool advanced = false;        // the state was advanced (false only when no finite solution was found)
   int projected_solves = 0;     // solves whose warm start failed and that were retried with projected multipliers
   int cold_restarts = 0;        // solves whose warm start failed and that were retried from a cold start
+  int proximal_solves = 0;      // solves that went on to the proximal-point rung after the cold start failed
   int smoothed_solves = 0;      // solves that went on to a smoothing continuation after the cold start failed
   int ipopt_solves = 0;         // Ipopt solves (the primary solver, or the ladder rung after the continuation)
   int substeps = 0;             // times a (sub-)step was split into two halves after its solve failed
