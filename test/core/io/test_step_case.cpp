@@ -256,6 +256,8 @@ TEST(StepCase, HighestRungFollowsTheLadder) {
   EXPECT_EQ(HighestRung(report, false), "cold");
   report.cold_restarts = 1;
   EXPECT_EQ(HighestRung(report, true), "cold");
+  report.proximal_solves = 1;
+  EXPECT_EQ(HighestRung(report, true), "proximal");
   report.smoothed_solves = 1;
   EXPECT_EQ(HighestRung(report, true), "smoothing");
   report.ipopt_solves = 1;

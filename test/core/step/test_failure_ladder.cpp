@@ -22,8 +22,10 @@ TEST(FailureLadder, WhenEveryRungFailsEachIsCountedAndTheBestFiniteIterateIsKept
   StepperOptions options;
   options.newton.max_iterations = 1;
   options.newton.tolerance = 1e-300;  // below what double precision can reach
+  options.proximal_weight = 1.0;
   const StepReport report = Step(w.model, options, &w.state, &w.data);
   EXPECT_EQ(report.cold_restarts, 1 + 2 + 4 + 8 + 16);    // every (sub-)step: warm fails, cold fails,
+  EXPECT_EQ(report.proximal_solves, 1 + 2 + 4 + 8 + 16);  // the proximal rung fails,
   EXPECT_EQ(report.smoothed_solves, 1 + 2 + 4 + 8 + 16);  // the continuation fails,
   EXPECT_EQ(report.ipopt_solves, 1 + 2 + 4 + 8 + 16);     // Ipopt and its polish fail,
   EXPECT_EQ(report.substeps, 1 + 2 + 4 + 8);              // and it splits down to h / 16
