@@ -114,9 +114,17 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
     SeedColdStart(model, state, &problem, &island->z_start);
     return SolveFromStart(options, island, report);
   }
-  // Rung 1: the warm start.
+  // Rung 1: the warm start, with the block predictor's sweeps when it starts far off.
   island->z_start = island->z;
   SeedWarmStart(model, state, &problem, &island->z_start);
+  if (options.predictor_sweeps > 0) {
+    problem.Evaluate(island->z_start, NcpEvalMode(), &island->ncp_error_rows, nullptr);  // a free workspace here
+    report->residual_evaluations++;
+    if (island->ncp_error_rows.norm() > options.predictor_residual) {
+      report->residual_evaluations += island->predictor.Run(problem, options.newton, options.predictor_sweeps, 0.1,
+                                                            &island->z_start);
+    }
+  }
   NcpSummary warm = SolveFromStart(options, island, report);
   if (warm.converged) return warm;
   island->z_best = island->z;  // the failed warm attempt (or the projected one, if better)

@@ -14,6 +14,7 @@
 #include "implicit_sim/core/model/model.h"
 #include "implicit_sim/core/model/state.h"
 #include "implicit_sim/core/ncp/semismooth_newton.h"
+#include "implicit_sim/core/step/block_predictor.h"
 #include "implicit_sim/core/step/step_problem.h"
 #include "implicit_sim/core/step/step_report.h"
 
@@ -43,6 +44,7 @@ struct IslandSolve {
   StepProblem problem;
   SemismoothNewton dense_solver, sparse_solver;
   SemismoothNewton& solver() { return problem.size() > kDenseSizeLimit ? sparse_solver : dense_solver; }
+  BlockPredictor predictor;  // StepperOptions::predictor_sweeps
   static constexpr int kDenseSizeLimit = 200;
   // --- the warm start (gathered from Data::z) and the workspace of the island's retry ladder and sub-steps ---
   bool has_warm_start = false;

@@ -23,6 +23,10 @@ struct StepperOptions {
   // The proximal-point rung (retry_ladder.h) starts with this weight (m/s per unit multiplier) and divides it by 10
   // each round; 0: no proximal rung. [0, 1000]
   double proximal_weight = 0.0;
+  // Block Gauss-Seidel sweeps (block_predictor.h) over the pair blocks with the largest residuals, before the warm
+  // solve, when its start's |Phi| exceeds predictor_residual; 0: none. [0, 20], (0, inf)
+  int predictor_sweeps = 0;
+  double predictor_residual = 1e-2;
   double contact_threshold = 1e-9;  // a pair counts as an active contact when its normal force exceeds this (N)
   // Broad phase (when Data uses one): a pair enters the NCP when the bounding spheres of its bodies, each grown by the
   // motion possible within the step (h |v| + h |w| |offset| + |g| h^2 / 2) plus this margin, overlap. (m, [0, 10])
@@ -66,7 +70,7 @@ struct OptionRow {
   void (*set)(StepperOptions* options, double value);
 };
 
-constexpr int kNumOptionRows = 19;
+constexpr int kNumOptionRows = 21;
 const std::array<OptionRow, kNumOptionRows>& OptionTable();
 
 // The row with this field, ROS parameter or runner flag; nullptr when none (an empty name finds nothing).
