@@ -40,13 +40,20 @@ TEST(FailureLadder, WhenEveryRungFailsEachIsCountedAndTheBestFiniteIterateIsKept
 }
 
 TEST(FailureLadder, AnIterationLimitOfOneIsRescuedByTheLadder) {
-  Warm w;
-  StepperOptions options;
-  options.newton.max_iterations = 1;
-  const StepReport report = Step(w.model, options, &w.state, &w.data);
-  EXPECT_TRUE(report.converged);
-  EXPECT_GE(report.cold_restarts, 1);
-  EXPECT_GE(report.smoothed_solves + report.substeps, 1);
+  for (const double proximal_weight : {0.0, 1.0}) {
+    Warm w;
+    StepperOptions options;
+    options.newton.max_iterations = 1;
+    options.proximal_weight = proximal_weight;
+    const StepReport report = Step(w.model, options, &w.state, &w.data);
+    EXPECT_TRUE(report.converged);
+    EXPECT_GE(report.cold_restarts, 1);
+    if (proximal_weight > 0.0) {  // one Newton iteration per proximal round: the rounds walk to the solution
+      EXPECT_GE(report.proximal_solves, 1);
+    } else {
+      EXPECT_GE(report.smoothed_solves + report.substeps, 1);
+    }
+  }
 }
 
 TEST(FailureLadder, AnImpossibleToleranceIsReportedAsNotConvergedWithTheRightPhysics) {
