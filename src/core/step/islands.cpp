@@ -36,6 +36,7 @@ void SizeWorkspace(IslandSolve* island) {
   island->z_start.setZero(n);
   island->z_best.setZero(n);
   island->z_center.setZero(n);
+  island->z_cold.setZero(n);
   island->ncp_error_rows.setZero(n);
   for (Eigen::VectorXd& backup : island->z_backup) backup.setZero(n);
   island->contacts.resize(island->pairs.size());

@@ -56,7 +56,7 @@ constexpr std::array<OptionRow, kNumOptionRows> kTable{{
      "1: every rung after the plain warm start uses projected multipliers (friction reads the slip speed max(sigma, 0))",
      [](const Options& o) { return o.projected_retries ? 1.0 : 0.0; },
      [](Options* o, double x) { o->projected_retries = x != 0.0; }},
-    {"proximal_weight", "", "", OptionKind::kReal, 0.0, 0.0, 1e3, false, false, "m/s", nullptr,
+    {"proximal_weight", "", "", OptionKind::kReal, 1.0, 0.0, 1e3, false, false, "m/s", nullptr,
      "first weight of the proximal-point rung after a failed cold start, divided by 10 each round (0: no such rung)",
      [](const Options& o) { return o.proximal_weight; }, [](Options* o, double x) { o->proximal_weight = x; }},
     {"predictor_sweeps", "", "", OptionKind::kInteger, 0.0, 0.0, 20.0, false, false, "", nullptr,

@@ -76,7 +76,7 @@ bool ProximalPoint(const StepperOptions& options, IslandSolve* island, StepRepor
 }
 
 // Rung 3: Newton on the FB functions smoothed by mu = 1e-2, 1e-3, ..., 1e-8, each from the last, then exactly.
-// Starts from island->z as the cold start (or the proximal rung) left it.
+// Starts from island->z as the cold start left it.
 bool SmoothingContinuation(const StepperOptions& options, IslandSolve* island, StepReport* report, BestAttempt* best,
                            NcpSummary* summary) {
   report->smoothed_solves++;
@@ -158,8 +158,10 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
   }
   island->z_start = island->z_best;
   NcpSummary summary;
-  if (later_options.proximal_weight > 0.0 && ProximalPoint(later_options, island, report, &best, &summary)) {
-    return summary;
+  if (later_options.proximal_weight > 0.0) {
+    island->z_cold = island->z;
+    if (ProximalPoint(later_options, island, report, &best, &summary)) return summary;
+    island->z.swap(island->z_cold);  // the continuation starts where the cold attempt ended, as without the rung
   }
   if (SmoothingContinuation(later_options, island, report, &best, &summary)) return summary;
   if ((last_chance || problem.size() <= kIpoptFirstSizeLimit) &&

@@ -52,6 +52,7 @@ struct IslandSolve {
   Eigen::VectorXd z_start;         // the initial guess of the current solve
   Eigen::VectorXd z_best;          // the best iterate of the ladder so far
   Eigen::VectorXd z_center;        // the proximal rung's centre
+  Eigen::VectorXd z_cold;          // the cold attempt's end, kept across the proximal rung for the continuation
   Eigen::VectorXd ncp_error_rows;  // the raw rows of the accepted solution (ncp_error.h)
   std::vector<Vec3> axes_warm_failed;
   std::vector<Eigen::VectorXd> z_backup;  // per sub-step depth

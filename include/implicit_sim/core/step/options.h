@@ -22,7 +22,7 @@ struct StepperOptions {
   bool projected_retries = true;
   // The proximal-point rung (retry_ladder.h) starts with this weight (m/s per unit multiplier) and divides it by 10
   // each round; 0: no proximal rung. [0, 1000]
-  double proximal_weight = 0.0;
+  double proximal_weight = 1.0;
   // Block Gauss-Seidel sweeps (block_predictor.h) over the pair blocks with the largest residuals, before the warm
   // solve, when its start's |Phi| exceeds predictor_residual; 0: none. [0, 20], (0, inf)
   int predictor_sweeps = 0;

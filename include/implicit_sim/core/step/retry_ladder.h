@@ -3,9 +3,9 @@
 //   1b. the same start by Newton with projected multipliers (ncp_problem.h; with StepperOptions::projected_retries,
 //       the default, this rung and every later Newton solve project);
 //   2. cold start: fresh closest points, normals and friction seeds;
-//   2b. with StepperOptions::proximal_weight > 0: proximal point, Newton on the problem perturbed by c (z - z_k) on
-//       the contact force and friction rows, each round from the last (z_k), c divided by 10 a round, from the better
-//       of rungs 1-2;
+//   2b. with StepperOptions::proximal_weight > 0 (the default): proximal point, Newton on the problem perturbed by
+//       c (z - z_k) on the contact force and friction rows, each round from the last (z_k), c divided by 10 a round,
+//       from the better of rungs 1-2;
 //   3. smoothing continuation: Newton on the Fischer-Burmeister functions smoothed by mu = 1e-2, 1e-3, ... 1e-8, each
 //      from the last, then on the exact problem;
 //   4. Ipopt on the complementarity-penalty NLP (ncp/ipopt_ncp.h) from the best of rungs 1-2, polished by Newton.
