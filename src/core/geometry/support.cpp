@@ -133,25 +133,29 @@ CrossingDescent DescendCrossing(const ConvexShape& shape1, const Pose& X_WB1, co
   return d;
 }
 
-ClosestPointsResult FindClosestPoints(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2,
-                                      const Pose& X_WB2) {
-  ClosestPointsResult result;
-  if (ClosedFormClosestPoints(shape1, X_WB1, shape2, X_WB2, &result)) return result;
+bool DescentClosestPoints(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2, const Pose& X_WB2,
+                          bool require_stationary, ClosestPointsResult* result) {
   // Strictly convex with a Lipschitz support map: the descent converges (a superellipsoid's support map is not
   // Lipschitz where a coordinate of A u vanishes, and a box's or a cylinder's is not unique).
   const auto smooth = [](const ConvexShape& shape) {
     return shape.type == ShapeType::kSphere || shape.type == ShapeType::kEllipsoid;
   };
-  if (smooth(shape1) && smooth(shape2)) {
-    const CrossingDescent d = DescendCrossing(shape1, X_WB1, shape2, X_WB2, -std::numeric_limits<double>::infinity(), 1000);
-    if (d.stationary) {
-      result.solved = true;
-      result.distance = std::max(0.0, -d.value);
-      result.p_W1 = d.p_W1;
-      result.p_W2 = d.p_W2;
-      return result;
-    }
-  }
+  if (!smooth(shape1) || !smooth(shape2)) return false;
+  const CrossingDescent d =
+      DescendCrossing(shape1, X_WB1, shape2, X_WB2, -std::numeric_limits<double>::infinity(), 1000);
+  if (require_stationary && !d.stationary) return false;
+  result->solved = std::isfinite(d.value);
+  result->distance = std::max(0.0, -d.value);
+  result->p_W1 = d.p_W1;
+  result->p_W2 = d.p_W2;
+  return true;
+}
+
+ClosestPointsResult FindClosestPoints(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2,
+                                      const Pose& X_WB2) {
+  ClosestPointsResult result;
+  if (ClosedFormClosestPoints(shape1, X_WB1, shape2, X_WB2, &result)) return result;
+  if (DescentClosestPoints(shape1, X_WB1, shape2, X_WB2, /*require_stationary=*/true, &result)) return result;
   return ComputeClosestPoints(shape1, X_WB1, shape2, X_WB2);
 }
 

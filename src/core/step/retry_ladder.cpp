@@ -12,6 +12,12 @@ namespace {
 // Hessian, and halving the step is cheaper: such islands try Ipopt only as a last chance, in the shortest sub-step.
 constexpr int kIpoptFirstSizeLimit = 600;
 
+// Adds a solve's iterations and residual evaluations to the report.
+void Count(const NcpSummary& summary, StepReport* report) {
+  report->iterations += summary.iterations;
+  report->residual_evaluations += summary.residual_evaluations;
+}
+
 // The primary solver from island->z_start; the solution goes to island->z.
 NcpSummary SolveFromStart(const StepperOptions& options, IslandSolve* island, StepReport* report) {
   island->z = island->z_start;
@@ -22,8 +28,7 @@ NcpSummary SolveFromStart(const StepperOptions& options, IslandSolve* island, St
   } else {
     summary = island->solver().Solve(island->problem, options.newton, &island->z);
   }
-  report->iterations += summary.iterations;
-  report->residual_evaluations += summary.residual_evaluations;
+  Count(summary, report);
   return summary;
 }
 
@@ -44,12 +49,16 @@ class BestAttempt {
   NcpSummary best_;
 };
 
-// A Newton solve of the exact problem from island->z, counted; true if it converged.
-bool NewtonPolish(const StepperOptions& options, IslandSolve* island, StepReport* report, NcpSummary* summary) {
+// The end of the rungs after the cold start: a Newton solve of the exact problem from island->z (if finite),
+// counted; true if it converged, otherwise its iterate is offered as the best attempt.
+bool PolishOrOffer(const StepperOptions& options, IslandSolve* island, StepReport* report, BestAttempt* best,
+                   NcpSummary* summary) {
+  if (!island->z.allFinite()) return false;
   *summary = island->solver().Solve(island->problem, options.newton, &island->z);
-  report->iterations += summary->iterations;
-  report->residual_evaluations += summary->residual_evaluations;
-  return summary->converged;
+  Count(*summary, report);
+  if (summary->converged) return true;
+  best->Offer(*summary, island);
+  return false;
 }
 
 // Rung 2b: proximal point. Newton on the problem perturbed by the weight c (z - z_k) on the contact force and friction
@@ -66,13 +75,9 @@ bool ProximalPoint(const StepperOptions& options, IslandSolve* island, StepRepor
     island->z_center = island->z;
     round.proximal_weight = c;
     *summary = island->solver().Solve(island->problem, round, &island->z);
-    report->iterations += summary->iterations;
-    report->residual_evaluations += summary->residual_evaluations;
+    Count(*summary, report);
   }
-  if (!island->z.allFinite()) return false;
-  if (NewtonPolish(options, island, report, summary)) return true;
-  best->Offer(*summary, island);
-  return false;
+  return PolishOrOffer(options, island, report, best, summary);
 }
 
 // Rung 3: Newton on the FB functions smoothed by mu = 1e-2, 1e-3, ..., 1e-8, each from the last, then exactly.
@@ -82,13 +87,9 @@ bool SmoothingContinuation(const StepperOptions& options, IslandSolve* island, S
   report->smoothed_solves++;
   for (double mu = 1e-2; mu > 1e-9 && island->z.allFinite(); mu *= 0.1) {
     *summary = island->solver().Solve(island->problem, options.newton, &island->z, mu);
-    report->iterations += summary->iterations;
-    report->residual_evaluations += summary->residual_evaluations;
+    Count(*summary, report);
   }
-  if (!island->z.allFinite()) return false;
-  if (NewtonPolish(options, island, report, summary)) return true;
-  best->Offer(*summary, island);
-  return false;
+  return PolishOrOffer(options, island, report, best, summary);
 }
 
 // Rung 4: Ipopt on the complementarity-penalty NLP from island->z_start, polished by Newton.
@@ -97,12 +98,8 @@ bool IpoptThenNewton(const StepperOptions& options, IslandSolve* island, StepRep
   report->ipopt_solves++;
   island->z = island->z_start;
   const NcpSummary ipopt = SolveNcpWithIpopt(island->problem, options.IpoptOptions(), &island->z);
-  report->iterations += ipopt.iterations;
-  report->residual_evaluations += ipopt.residual_evaluations;
-  if (!island->z.allFinite()) return false;
-  if (NewtonPolish(options, island, report, summary)) return true;
-  best->Offer(*summary, island);
-  return false;
+  Count(ipopt, report);
+  return PolishOrOffer(options, island, report, best, summary);
 }
 
 }  // namespace

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "contact_frame.h"
 #include "implicit_sim/core/geometry/support.h"
@@ -13,19 +12,8 @@ ClosestPointsResult QuickClosestPoints(const ConvexShape& shape1, const Pose& X_
                                        const Pose& X_WB2) {
   ClosestPointsResult cp;
   if (ClosedFormClosestPoints(shape1, X_WB1, shape2, X_WB2, &cp)) return cp;
-  if (shape1.type == ShapeType::kEllipsoid || shape2.type == ShapeType::kEllipsoid) {
-    const bool smooth1 = shape1.type == ShapeType::kSphere || shape1.type == ShapeType::kEllipsoid;
-    const bool smooth2 = shape2.type == ShapeType::kSphere || shape2.type == ShapeType::kEllipsoid;
-    if (smooth1 && smooth2) {  // the support-function descent, stationary or not (never the oracle)
-      const CrossingDescent d =
-          DescendCrossing(shape1, X_WB1, shape2, X_WB2, -std::numeric_limits<double>::infinity(), 1000);
-      cp.solved = std::isfinite(d.value);
-      cp.distance = std::max(0.0, -d.value);
-      cp.p_W1 = d.p_W1;
-      cp.p_W2 = d.p_W2;
-      return cp;
-    }
-  }
+  // The support-function descent, stationary or not (never the oracle).
+  if (DescentClosestPoints(shape1, X_WB1, shape2, X_WB2, /*require_stationary=*/false, &cp)) return cp;
   const Vec3 u = ((X_WB1 * shape1.X_BS).translation() - (X_WB2 * shape2.X_BS).translation()).normalized();
   cp.solved = u.allFinite() && SupportPoint(shape1, X_WB1, -u, &cp.p_W1) && SupportPoint(shape2, X_WB2, u, &cp.p_W2);
   if (cp.solved) cp.distance = std::max(0.0, u.dot(cp.p_W1 - cp.p_W2));

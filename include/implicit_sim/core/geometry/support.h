@@ -32,6 +32,11 @@ struct CrossingDescent {
 CrossingDescent DescendCrossing(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2,
                                 const Pose& X_WB2, double stop_below, int max_steps);
 
+// Closest points of a sphere or an ellipsoid and a sphere or an ellipsoid by DescendCrossing (distance >= 0). Returns
+// false for other shapes, and with require_stationary when the descent did not reach a stationary direction.
+bool DescentClosestPoints(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2, const Pose& X_WB2,
+                          bool require_stationary, ClosestPointsResult* result);
+
 // The closed form when there is one; for two spheres or ellipsoids the support-function descent run to a stationary
 // direction (microseconds); the Ipopt oracle (paper eq. 7, milliseconds) otherwise.
 ClosestPointsResult FindClosestPoints(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2,
