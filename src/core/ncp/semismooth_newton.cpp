@@ -59,6 +59,10 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
   }
   const Eigen::SparseMatrix<double>& J = J_sparse_.matrix;
   if (!least_squares) {
+    if (condense_ && condensed_lu_.Factorize(J, J_sparse_.pattern_version())) {
+      dz_ = -Phi_;
+      return condensed_lu_.Solve(&dz_) && dz_.allFinite();
+    }
     if (!lu_.Factorize(J, J_sparse_.pattern_version())) return false;
     dz_ = -Phi_;
     return lu_.Solve(&dz_) && dz_.allFinite();
@@ -110,6 +114,13 @@ NcpSummary SemismoothNewton::Solve(const NcpProblem& problem, const NewtonOption
   mode_.proximal_center = options.proximal_center;
   Resize(problem.size());
   if (sparse_) lu_.ForgetPivots();  // a solve depends on its inputs only
+  condense_ = false;
+  if (sparse_ && options.condense_blocks) {
+    problem.CondensableBlocks(&block_starts_, &block_indices_);
+    condensed_lu_.SetBlocks(block_starts_, block_indices_);
+    condensed_lu_.ForgetPivots();
+    condense_ = condensed_lu_.has_blocks();
+  }
   // delta enters the Jacobian only, never Phi; the first one from the residual at the start.
   mode_.regularization = options.sparse_regularization;
   if (options.residual_regularization > 0.0) {

@@ -137,6 +137,16 @@ bool StepProblem::IsComplementarityRow(int row, double* scale) const {
   return complementarity_kind_[row] != 0;
 }
 
+void StepProblem::CondensableBlocks(std::vector<int>* starts, std::vector<int>* indices) const {
+  starts->assign(1, 0);
+  indices->clear();
+  for (const PairBlock& block : blocks_) {
+    for (int k = pair_index::kA1; k <= pair_index::kD; ++k) indices->push_back(block.offset + k);
+    for (int k = 0; k < block.k1 + block.k2; ++k) indices->push_back(block.offset + pair_index::kAlpha + k);
+    starts->push_back(static_cast<int>(indices->size()));
+  }
+}
+
 void StepProblem::BeginStep(const State& start, double h, const Eigen::VectorXd* external_wrench_W) {
   const Model& model = model_;
   h_ = h;

@@ -5,7 +5,10 @@
 #include <random>
 #include <string>
 
+#include <Eigen/LU>
 #include <gtest/gtest.h>
+
+#include "implicit_sim/core/ncp/condensed_lu.h"
 
 #include "test_models.h"
 
@@ -148,6 +151,57 @@ TEST(StepProblem, ProximalTermPerturbsOnlyTheForceAndFrictionRows) {
   problem.Evaluate(z, raw_only, &raw_plain, nullptr);
   problem.Evaluate(z, raw, &raw_perturbed, nullptr);
   EXPECT_EQ((raw_perturbed - raw_plain).lpNorm<Eigen::Infinity>(), 0.0);
+}
+
+// The closest-point blocks the sparse solver condenses (NcpProblem::CondensableBlocks) touch only their own unknowns
+// and the velocities of the moving bodies, and the condensed LU of the sparse Jacobian solves like a dense LU of it.
+void ExpectCondensableBlocksAreLocal(const Model& model, unsigned seed) {
+  StepProblem problem(model);
+  problem.set_regular_separated_friction(true);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::VectorXd z(problem.size());
+  for (int i = 0; i < z.size(); ++i) z[i] = u(rng);
+  for (const PairBlock& blk : problem.blocks()) z.segment<3>(blk.offset + pair_index::kN) += Vec3(0.3, -0.2, 1.0);
+  State start = State::Initial(model);
+  for (int i = 0; i < start.v.size(); ++i) start.v[i] = 2.0 * u(rng);
+  problem.BeginStep(start, 0.05, nullptr);
+  problem.ResetTangentAxes(z);
+  std::vector<int> starts, indices;
+  problem.CondensableBlocks(&starts, &indices);
+  ASSERT_EQ(starts.size(), problem.blocks().size() + 1);
+  std::vector<int> block_of(z.size(), -1);
+  for (size_t p = 0; p + 1 < starts.size(); ++p) {
+    for (int k = starts[p]; k < starts[p + 1]; ++k) block_of[indices[k]] = static_cast<int>(p);
+  }
+  SparseJacobian J;
+  Eigen::VectorXd Phi;
+  problem.EvaluateSparse(z, NcpEvalMode(), &Phi, &J);
+  const int num_velocities = 6 * static_cast<int>(problem.slots().size());
+  int condensed_rows = 0;
+  for (int col = 0; col < z.size(); ++col) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(J.matrix, col); it; ++it) {
+      const int row = static_cast<int>(it.row());
+      if (block_of[row] < 0 || block_of[row] == block_of[col]) continue;
+      EXPECT_LT(col, num_velocities) << "row " << row << " of block " << block_of[row] << " touches column " << col;
+    }
+  }
+  for (int b : block_of) condensed_rows += b >= 0;
+  EXPECT_EQ(condensed_rows, static_cast<int>(indices.size()));
+  CondensedLu lu;
+  lu.SetBlocks(starts, indices);
+  ASSERT_TRUE(lu.Factorize(J.matrix, J.pattern_version()));
+  EXPECT_EQ(lu.global_size(), z.size() - static_cast<int>(indices.size()));
+  Eigen::VectorXd x = Phi;
+  ASSERT_TRUE(lu.Solve(&x));
+  const Eigen::VectorXd expected = Eigen::MatrixXd(J.matrix).partialPivLu().solve(Phi);
+  EXPECT_LT((x - expected).norm() / expected.norm(), 1e-9);
+}
+
+TEST(StepProblem, CondensableBlocksTouchOnlyThemselvesAndBodyVelocities) {
+  ExpectCondensableBlocksAreLocal(test_models::SphereOnTwoSpheres(), 21);
+  ExpectCondensableBlocksAreLocal(test_models::BoxAndSuperellipsoid(), 22);
+  ExpectCondensableBlocksAreLocal(test_models::JointedRobot(), 23);
 }
 
 TEST(StepProblemJacobian, SparseAssemblyWithSeparatedFrictionRows) {

@@ -77,6 +77,13 @@ class NcpProblem {
                         Eigen::MatrixXd* J) const = 0;
   virtual void EvaluateSparse(const Eigen::VectorXd& z, const NcpEvalMode& mode, Eigen::VectorXd* Phi,
                               SparseJacobian* J) const = 0;
+  // Local blocks the sparse solver may condense out of the Newton matrix (condensed_lu.h): block p holds the unknowns
+  // indices[starts[p] .. starts[p + 1]), and no row of one block touches an unknown of another. Fixed for a
+  // pattern_version. By default none.
+  virtual void CondensableBlocks(std::vector<int>* starts, std::vector<int>* indices) const {
+    starts->assign(1, 0);
+    indices->clear();
+  }
 };
 
 }  // namespace implicit_sim

@@ -6,6 +6,8 @@
 // keeps the system regular where contact forces are redundant (a body resting on several others) while the residual,
 // and so the solution, stays exact. If the LU fails or its direction does not decrease the merit, the
 // Levenberg-Marquardt normal equations (J^T J + lambda I) dz = -J^T Phi are solved instead (dense or sparse LDL^T).
+// A sparse solve first condenses the problem's local blocks (the step's closest-point unknowns) out of the Newton
+// matrix (condensed_lu.h), and factorizes the whole matrix only when that fails.
 // The workspace is sized once per layout; a dense Solve does not allocate.
 #pragma once
 
@@ -17,6 +19,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCholesky>
 
+#include "implicit_sim/core/ncp/condensed_lu.h"
 #include "implicit_sim/core/ncp/ncp_problem.h"
 #include "implicit_sim/core/ncp/ncp_summary.h"
 #include "implicit_sim/core/ncp/sparse_lu.h"
@@ -40,6 +43,9 @@ struct NewtonOptions {
   // NcpEvalMode::proximal_weight and proximal_center for this solve (the retry ladder's proximal rung; 0: off).
   double proximal_weight = 0.0;
   const Eigen::VectorXd* proximal_center = nullptr;
+  // Sparse solves condense the problem's local blocks (NcpProblem::CondensableBlocks) out of the Newton matrix by a
+  // Schur complement before KLU (condensed_lu.h); the whole matrix is factorized when a block is singular.
+  bool condense_blocks = true;
   // The allowed ranges are those of the step's options table (step/options.h), which validates these fields.
 };
 
@@ -71,6 +77,9 @@ class SemismoothNewton {
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
   SparseJacobian J_sparse_;
   SparseLu lu_;
+  CondensedLu condensed_lu_;
+  bool condense_ = false;  // this solve condenses blocks
+  std::vector<int> block_starts_, block_indices_;
   Eigen::SparseMatrix<double> normal_sparse_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> sparse_ldlt_;
   int lm_fallbacks_ = 0;

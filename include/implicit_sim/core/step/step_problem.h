@@ -144,6 +144,9 @@ class StepProblem final : public NcpProblem {
   // Raw rows: each complementarity row returns b(z), the function side of its pair (-f_i(a1), -g_j(a2), d, zeta);
   // the variable side a is the unknown with the row's own index (scaled by 1/Fs for the normal force).
   bool IsComplementarityRow(int row, double* scale) const override;
+  // One block per pair: its closest-point unknowns a1, a2, n, d, alpha, beta, whose rows touch only themselves and
+  // the velocities of the pair's bodies.
+  void CondensableBlocks(std::vector<int>* starts, std::vector<int>* indices) const override;
   // Friction rows with sigma + max(d, 0) / h in place of sigma (see AddPair); off by default. Keeps the Newton matrix
   // regular at separated pairs; fixed for the life of the problem (Data turns it on).
   void set_regular_separated_friction(bool on) { regular_separated_friction_ = on; }
