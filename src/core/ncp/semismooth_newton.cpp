@@ -35,6 +35,27 @@ void SemismoothNewton::Evaluate(const NcpProblem& problem, const Eigen::VectorXd
   }
 }
 
+bool SemismoothNewton::CondensedDirection(const Eigen::SparseMatrix<double>& J) {
+  // The condensed LU works with each closest-point block's explicit inverse, which loses digits where a block is ill
+  // conditioned (a nearly flat patch, a nearly degenerate normal cone): its direction is checked by its linear
+  // residual, refined once, and left to the LU of the whole matrix if still inaccurate.
+  constexpr double kRelativeLinearResidual = 1e-8;
+  dz_ = -Phi_;
+  if (!condensed_lu_.Solve(&dz_)) return false;
+  const double bound = kRelativeLinearResidual * Phi_.norm();
+  for (int refinement = 0;; ++refinement) {
+    rhs_.noalias() = J * dz_;
+    rhs_ += Phi_;  // the linear residual J dz + Phi
+    const double residual = rhs_.norm();
+    if (!std::isfinite(residual)) return false;
+    if (residual <= bound) return true;
+    if (refinement == 1) return false;
+    rhs_ = -rhs_;
+    if (!condensed_lu_.Solve(&rhs_)) return false;
+    dz_ += rhs_;
+  }
+}
+
 bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, bool least_squares) {
   const double damping = options.lm_damping * std::max(1.0, merit);
   if (!sparse_) {
@@ -59,10 +80,7 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
   }
   const Eigen::SparseMatrix<double>& J = J_sparse_.matrix;
   if (!least_squares) {
-    if (condense_ && condensed_lu_.Factorize(J, J_sparse_.pattern_version())) {
-      dz_ = -Phi_;
-      return condensed_lu_.Solve(&dz_) && dz_.allFinite();
-    }
+    if (condense_ && condensed_lu_.Factorize(J, J_sparse_.pattern_version()) && CondensedDirection(J)) return true;
     if (!lu_.Factorize(J, J_sparse_.pattern_version())) return false;
     dz_ = -Phi_;
     return lu_.Solve(&dz_) && dz_.allFinite();

@@ -146,6 +146,46 @@ TEST(NcpSemismoothNewton, SolvesANonlinearMixedNcp) {
   }
 }
 
+// NonlinearNcp with its equation row (z2^3 + z2 - z0 - 1 = 0: it touches z2 and the "global" z0) declared a
+// condensable block, so that the sparse solve goes through CondensedLu.
+class BlockedNonlinearNcp : public NcpProblem {
+ public:
+  int size() const override { return inner_.size(); }
+  bool IsComplementarityRow(int row, double* scale) const override { return inner_.IsComplementarityRow(row, scale); }
+  int pattern_version() const override { return inner_.pattern_version(); }
+  void Evaluate(const Eigen::VectorXd& z, const NcpEvalMode& mode, Eigen::VectorXd* Phi,
+                Eigen::MatrixXd* J) const override {
+    inner_.Evaluate(z, mode, Phi, J);
+  }
+  void EvaluateSparse(const Eigen::VectorXd& z, const NcpEvalMode& mode, Eigen::VectorXd* Phi,
+                      SparseJacobian* J) const override {
+    inner_.EvaluateSparse(z, mode, Phi, J);
+  }
+  void CondensableBlocks(std::vector<int>* starts, std::vector<int>* indices) const override {
+    *starts = {0, 1};
+    *indices = {2};
+  }
+
+ private:
+  NonlinearNcp inner_;
+};
+
+// The condensed direction is the uncondensed one up to rounding: the same iterations to the same solution.
+TEST(NcpSemismoothNewton, CondensedBlocksGiveTheSameIterates) {
+  const BlockedNonlinearNcp problem;
+  for (const Eigen::Vector3d& start : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(2, 0.5, 2),
+                                       Eigen::Vector3d(0.1, 3, -1)}) {
+    SCOPED_TRACE(::testing::Message() << "from " << start.transpose());
+    NewtonOptions whole;
+    whole.condense_blocks = false;
+    const Solved condensed = SolveWithNewton(problem, start, true);
+    const Solved uncondensed = SolveWithNewton(problem, start, true, whole);
+    EXPECT_TRUE(condensed.summary.converged) << condensed.summary.BriefReport();
+    EXPECT_EQ(condensed.summary.iterations, uncondensed.summary.iterations);
+    EXPECT_LE(MaxDifference(condensed.z, NonlinearNcp::Solution()), 1e-12) << condensed.z.transpose();
+  }
+}
+
 TEST(NcpSemismoothNewton, RegularizationLeavesTheSolutionExact) {
   NewtonOptions options;
   options.sparse_regularization = 1e-3;  // a large proximal term: slower, but Phi and so the solution are exact

@@ -66,6 +66,8 @@ class SemismoothNewton {
   void RememberMerit(double merit);  // into the line search's memory
   // dz_ from Phi_ and the Jacobian: the LU Newton direction, or with least_squares the Levenberg-Marquardt one.
   bool Direction(const NewtonOptions& options, double merit, bool least_squares);
+  // dz_ by the condensed LU (factorized), if accurate (see the definition); false: use the whole matrix's LU.
+  bool CondensedDirection(const Eigen::SparseMatrix<double>& J);
   // The Armijo step length along dz_ from z (0 if none down to min_step); the new point is left in z_trial_.
   double LineSearch(const NcpProblem& problem, const NewtonOptions& options, const Eigen::VectorXd& z, double merit);
   bool sparse_;
