@@ -17,6 +17,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "implicit_sim/core/geometry/support.h"
 #include "implicit_sim/core/model/joints.h"
 #include "implicit_sim/core/ncp/ncp_error.h"
 #include "implicit_sim/core/step/islands.h"
@@ -55,24 +56,43 @@ void SetPairs(const Model& model, const State& state, const std::vector<int>& pa
   }
 }
 
-// Whether a candidate pair of two moving bodies can touch within the step by their relative motion: their bounding
-// spheres at the start, apart by more than the relative motion possible within the step (h |v1 - v2| + h |w_i| lever_i,
-// where a common velocity and gravity cancel) plus the margin, cannot. A layer of parts falling side by side then
-// forms one island per part instead of one for the layer. (The end-of-step check still catches what this misses.)
-bool CanTouchWithinStep(const Model& model, const StepperOptions& options, double h, const State& state, int pair) {
+// Whether two posed shapes are certified apart by more than `clearance` (m): some unit n along which the lowest point
+// of body 1 lies more than `clearance` above the highest point of body 2 (their support points; any n bounds the
+// distance from below). Found by the support-function descent, for shapes with closed-form support points; two
+// spheres are left to their bounding spheres, which are exact.
+bool CertifiedApart(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2, const Pose& X_WB2,
+                    double clearance) {
+  if (shape1.type == ShapeType::kSphere && shape2.type == ShapeType::kSphere) return false;
+  constexpr int kMaxDescentSteps = 30;
+  return DescendCrossing(shape1, X_WB1, shape2, X_WB2, -clearance, kMaxDescentSteps).value < -clearance;
+}
+
+// Whether a candidate pair of two moving bodies can touch within the step by their relative motion (a common velocity
+// and gravity cancel): not if their bounding spheres at the start are apart by more than the relative motion of
+// their centres within the step (h |v1 - v2| + h |w_i| lever_i) plus the margin, nor if the shapes themselves are
+// certified apart by more than the relative motion of any of their points (h |v1 - v2| + h |w_i| (lever_i + R_i))
+// plus the margin. A layer of parts falling side by side then forms one island per part instead of one for the
+// layer, and packed ellipsoids whose bounding spheres overlap stay apart. (The end-of-step check still catches what
+// this misses.) X_WB: every body's pose at the start.
+bool CanTouchWithinStep(const Model& model, const StepperOptions& options, double h, const State& state,
+                        const std::vector<Pose>& X_WB, int pair) {
   const ContactPair& p = model.pairs[pair];
   const int k1 = model.velocity_slot[p.body1], k2 = model.velocity_slot[p.body2];
   if (k1 < 0 || k2 < 0) return true;
   const ConvexShape& s1 = model.bodies[p.body1].shape;
   const ConvexShape& s2 = model.bodies[p.body2].shape;
-  if (!std::isfinite(s1.BoundingRadius()) || !std::isfinite(s2.BoundingRadius())) return true;
+  const double R1 = s1.BoundingRadius(), R2 = s2.BoundingRadius();
+  if (!std::isfinite(R1) || !std::isfinite(R2)) return true;
   const double lever1 = s1.X_BS.translation().norm(), lever2 = s2.X_BS.translation().norm();
-  const Vec3 c1 = state.X_WB(model, p.body1) * s1.X_BS.translation();
-  const Vec3 c2 = state.X_WB(model, p.body2) * s2.X_BS.translation();
-  const double gap = (c1 - c2).norm() - s1.BoundingRadius() - s2.BoundingRadius();
-  const double reach = h * ((state.v_WB(k1) - state.v_WB(k2)).norm() + state.w_WB(k1).norm() * lever1 +
-                            state.w_WB(k2).norm() * lever2) + options.broad_phase_margin;
-  return gap <= reach;
+  const Vec3 c1 = X_WB[p.body1] * s1.X_BS.translation();
+  const Vec3 c2 = X_WB[p.body2] * s2.X_BS.translation();
+  const double gap = (c1 - c2).norm() - R1 - R2;
+  const double dv = (state.v_WB(k1) - state.v_WB(k2)).norm();
+  const double w1 = state.w_WB(k1).norm(), w2 = state.w_WB(k2).norm();
+  const double reach = h * (dv + w1 * lever1 + w2 * lever2) + options.broad_phase_margin;
+  if (gap > reach) return false;
+  const double sweep = h * (dv + w1 * (lever1 + R1) + w2 * (lever2 + R2)) + options.broad_phase_margin;
+  return !CertifiedApart(s1, X_WB[p.body1], s2, X_WB[p.body2], sweep);
 }
 
 // The pairs of the NCP for a step of length h from `state`: the broad phase over bounding spheres grown by the motion
@@ -89,7 +109,7 @@ void SelectPairs(const Model& model, const StepperOptions& options, double h, co
   }
   data->broad.FindPairs(data->X_WB, data->inflation, &data->candidates);
   data->candidates.erase(std::remove_if(data->candidates.begin(), data->candidates.end(),
-                                        [&](int pair) { return !CanTouchWithinStep(model, options, h, state, pair); }),
+                                        [&](int pair) { return !CanTouchWithinStep(model, options, h, state, data->X_WB, pair); }),
                          data->candidates.end());
   data->merged.clear();
   std::set_union(data->candidates.begin(), data->candidates.end(), data->forced_pairs.begin(),
@@ -99,7 +119,8 @@ void SelectPairs(const Model& model, const StepperOptions& options, double h, co
 }
 
 // The end-of-step check of the pairs left out of the NCP: bounding spheres (no growth) at the end poses in `end`.
-// Pairs that overlap are added to Data::forced_pairs; returns how many.
+// Pairs whose spheres overlap, unless the shapes are certified apart (CertifiedApart), are added to
+// Data::forced_pairs; returns how many.
 int CheckLeftOutPairs(const Model& model, const State& end, Data* data) {
   for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
     data->X_WB[b] = end.X_WB(model, b);
@@ -110,6 +131,11 @@ int CheckLeftOutPairs(const Model& model, const State& end, Data* data) {
   int missing = 0;
   for (int pair : data->candidates) {
     if (std::binary_search(data->pairs.begin(), data->pairs.end(), pair)) continue;
+    const ContactPair& p = model.pairs[pair];
+    if (CertifiedApart(model.bodies[p.body1].shape, data->X_WB[p.body1], model.bodies[p.body2].shape,
+                       data->X_WB[p.body2], 0.0)) {
+      continue;
+    }
     data->forced_pairs.push_back(pair);
     ++missing;
   }

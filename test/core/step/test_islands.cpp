@@ -72,6 +72,38 @@ TEST(Islands, PartsFallingSideBySideAreSeparateIslands) {
   EXPECT_EQ(report.pairs_in_ncp, 0);
 }
 
+// Ellipsoids (semi-axes 0.06, 0.05, 0.04 m) side by side along y, centres `spacing` apart, at rest at height z, the
+// second one moving towards the first at `approach` (m/s).
+Model EllipsoidsSideBySide(double spacing, double z) {
+  Model m;
+  m.bodies.push_back(test_models::FixedBody("ground", MakeHalfSpace()));
+  for (int i = 0; i < 2; ++i) {
+    m.bodies.push_back(test_models::MovingBody("part" + std::to_string(i), MakeEllipsoid(Vec3(0.06, 0.05, 0.04)), 0.1,
+                                               test_models::MakePose(Vec3(0.0, spacing * i, z))));
+  }
+  return test_models::Finish(m);
+}
+
+int PairsInNcpAfterOneStep(double spacing, double approach) {
+  const Model model = EllipsoidsSideBySide(spacing, 1.0);
+  Data data(model, Data::PairSelection::kBroadPhase);
+  State state = State::Initial(model);
+  state.v[Model::v_offset(1) + 1] = -approach;
+  StepperOptions options;
+  options.h = 0.01;
+  const StepReport report = Step(model, options, &state, &data);
+  EXPECT_TRUE(report.converged) << report.fault_detail;
+  return report.pairs_in_ncp;
+}
+
+TEST(Islands, EllipsoidsWhoseBoundingSpheresOverlapStayOutWhileCertifiedApart) {
+  // 0.11 m apart along y: the shapes are 1 cm apart, their bounding spheres (r = 0.06 m) overlap by 1 cm.
+  EXPECT_EQ(PairsInNcpAfterOneStep(0.11, 0.0), 0);
+  EXPECT_EQ(PairsInNcpAfterOneStep(0.11, 0.4), 0);  // closes 4 mm of the 1 cm within the step (+ 5 mm margin)
+  EXPECT_EQ(PairsInNcpAfterOneStep(0.11, 0.6), 1);  // 6 mm + 5 mm: it may touch, so it is in
+  EXPECT_EQ(PairsInNcpAfterOneStep(0.1, 0.0), 1);   // touching
+}
+
 TEST(Islands, ResultsAreBitIdenticalForAnyNumberOfThreads) {
   // A pile of 20 spheres landing: islands form, merge and split; some steps climb the retry ladder.
   const Model model = LoadSceneFromString(MakePileUrdf(20, PileShape::kSphere), "pile");
