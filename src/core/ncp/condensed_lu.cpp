@@ -90,7 +90,7 @@ void CondensedLu::Analyze(const Eigen::SparseMatrix<double>& J) {
     }
   }
   border_.clear();
-  int dense_size = 0, schur_size = 0;
+  int dense_size = 0, schur_size = 0;  // the sizes of dense_ and schur_slot_
   for (size_t p = 0; p < blocks_.size(); ++p) {
     SortUnique(&rows[p]);
     SortUnique(&cols[p]);
@@ -106,7 +106,19 @@ void CondensedLu::Analyze(const Eigen::SparseMatrix<double>& J) {
     schur_size += block.border_rows * block.border_cols;
   }
   dense_.assign(dense_size, 0.0);
-  // S's pattern: A's entries and every (border row, border column) of each block.
+  schur_slot_.resize(schur_size);
+  BuildSchurPattern(J);
+  MapEntries(J);
+  rhs_global_.resize(static_cast<Eigen::Index>(global_.size()));
+  ++schur_version_;
+  analyzed_ = true;
+}
+
+// S's pattern: A's entries and every (border row, border column) of each block; and the slot of each of the latter.
+void CondensedLu::BuildSchurPattern(const Eigen::SparseMatrix<double>& J) {
+  const int n = static_cast<int>(J.rows());
+  const int* outer = J.outerIndexPtr();
+  const int* inner = J.innerIndexPtr();
   std::vector<Eigen::Triplet<double>> triplets;
   for (int col = 0; col < n; ++col) {
     for (int k = outer[col]; k < outer[col + 1]; ++k) {
@@ -124,7 +136,6 @@ void CondensedLu::Analyze(const Eigen::SparseMatrix<double>& J) {
   S_.resize(m, m);
   S_.setFromTriplets(triplets.begin(), triplets.end());
   S_.makeCompressed();
-  schur_slot_.resize(schur_size);
   for (const Block& block : blocks_) {
     const int* border_rows = border_.data() + block.border_first;
     const int* border_cols = border_rows + block.border_rows;
@@ -134,7 +145,13 @@ void CondensedLu::Analyze(const Eigen::SparseMatrix<double>& J) {
       }
     }
   }
-  // Where each stored entry of J goes: S (its slot) or a dense block (-1 - index).
+}
+
+// Where each stored entry of J goes: S (its slot) or a dense block (-1 - index).
+void CondensedLu::MapEntries(const Eigen::SparseMatrix<double>& J) {
+  const int n = static_cast<int>(J.rows());
+  const int* outer = J.outerIndexPtr();
+  const int* inner = J.innerIndexPtr();
   entry_target_.resize(J.nonZeros());
   for (int col = 0; col < n; ++col) {
     for (int k = outer[col]; k < outer[col + 1]; ++k) {
@@ -161,9 +178,6 @@ void CondensedLu::Analyze(const Eigen::SparseMatrix<double>& J) {
       entry_target_[k] = -1 - index;
     }
   }
-  rhs_global_.resize(m);
-  ++schur_version_;
-  analyzed_ = true;
 }
 
 bool CondensedLu::Factorize(const Eigen::SparseMatrix<double>& J, int pattern_version) {

@@ -56,7 +56,11 @@ class CondensedLu {
     int dense_first = 0;          // into dense_: D_p^-1 (size^2), B_p (border_rows x size), C_p (size x border_cols)
     int schur_first = 0;          // into schur_slot_: S's slot of each (border row, border col), column-major
   };
+  // Analyze: which blocks are condensed, the global numbering, each block's border and dense layout; then S's
+  // pattern and the slots of each block's Schur update, and where each stored entry of J goes.
   void Analyze(const Eigen::SparseMatrix<double>& J);
+  void BuildSchurPattern(const Eigen::SparseMatrix<double>& J);
+  void MapEntries(const Eigen::SparseMatrix<double>& J);
 
   std::vector<int> starts_, indices_;  // the blocks as set
   bool analyzed_ = false;
