@@ -122,7 +122,8 @@ void CondensedLu::BuildSchurPattern(const Eigen::SparseMatrix<double>& J) {
   std::vector<Eigen::Triplet<double>> triplets;
   for (int col = 0; col < n; ++col) {
     for (int k = outer[col]; k < outer[col + 1]; ++k) {
-      if (block_of_[col] < 0 && block_of_[inner[k]] < 0) triplets.emplace_back(position_[inner[k]], position_[col], 0.0);
+      const int row = inner[k];
+      if (block_of_[col] < 0 && block_of_[row] < 0) triplets.emplace_back(position_[row], position_[col], 0.0);
     }
   }
   for (const Block& block : blocks_) {

@@ -108,8 +108,8 @@ void SelectPairs(const Model& model, const StepperOptions& options, double h, co
         k < 0 ? 0.0 : h * (state.v_WB(k).norm() + state.w_WB(k).norm() * lever) + fall + options.broad_phase_margin;
   }
   data->broad.FindPairs(data->X_WB, data->inflation, &data->candidates);
-  data->candidates.erase(std::remove_if(data->candidates.begin(), data->candidates.end(),
-                                        [&](int pair) { return !CanTouchWithinStep(model, options, h, state, data->X_WB, pair); }),
+  const auto cannot_touch = [&](int pair) { return !CanTouchWithinStep(model, options, h, state, data->X_WB, pair); };
+  data->candidates.erase(std::remove_if(data->candidates.begin(), data->candidates.end(), cannot_touch),
                          data->candidates.end());
   data->merged.clear();
   std::set_union(data->candidates.begin(), data->candidates.end(), data->forced_pairs.begin(),
