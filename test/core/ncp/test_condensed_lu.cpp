@@ -10,10 +10,13 @@
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
+#include "ncp/test_ncp_problems.h"
+
 namespace implicit_sim {
 namespace {
 
 using SparseMatrix = Eigen::SparseMatrix<double>;
+using ncp_test::RandomVector;
 
 // n unknowns, of which `num_blocks` blocks of 3-12 unknowns at random (interleaved) indices; the rest are global.
 // Each block's rows touch its own unknowns (dense, diagonally dominant) and up to 12 global unknowns; each global row
@@ -73,13 +76,6 @@ SparseMatrix Values(const BlockSystem& system, std::mt19937* rng) {
   A.setFromTriplets(triplets.begin(), triplets.end());
   A.makeCompressed();
   return A;
-}
-
-Eigen::VectorXd RandomVector(int n, std::mt19937* rng) {
-  std::uniform_real_distribution<double> value(-1.0, 1.0);
-  Eigen::VectorXd b(n);
-  for (int i = 0; i < n; ++i) b[i] = value(*rng);
-  return b;
 }
 
 // |x - A^-1 b| / |A^-1 b| for x from the condensed LU (infinity if it fails).

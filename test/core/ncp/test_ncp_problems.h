@@ -1,9 +1,11 @@
 // Small mixed NCPs with known solutions for the solver tests (linear, simplex projection, nonlinear, arctangent),
-// each with a dense and a sparse Jacobian honouring NcpEvalMode, and wrappers that record or poison evaluations.
+// each with a dense and a sparse Jacobian honouring NcpEvalMode, and wrappers that record or poison evaluations;
+// RandomVector for the linear solver tests.
 #pragma once
 
 #include <cmath>
 #include <limits>
+#include <random>
 #include <utility>
 #include <vector>
 
@@ -14,6 +16,14 @@
 
 namespace implicit_sim {
 namespace ncp_test {
+
+// n values uniform in [-1, 1).
+inline Eigen::VectorXd RandomVector(int n, std::mt19937* rng) {
+  std::uniform_real_distribution<double> value(-1.0, 1.0);
+  Eigen::VectorXd b(n);
+  for (int i = 0; i < n; ++i) b[i] = value(*rng);
+  return b;
+}
 
 // A mixed NCP given row by row: row i is the equation f_i(z) = 0 (scale 0) or the complementarity pair
 // 0 <= scale_i z_i _|_ f_i(z) >= 0, reformulated as FB(scale_i z_i, f_i(z)). The regularization of NcpEvalMode goes

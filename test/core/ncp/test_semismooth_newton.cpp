@@ -148,26 +148,12 @@ TEST(NcpSemismoothNewton, SolvesANonlinearMixedNcp) {
 
 // NonlinearNcp with its equation row (z2^3 + z2 - z0 - 1 = 0: it touches z2 and the "global" z0) declared a
 // condensable block, so that the sparse solve goes through CondensedLu.
-class BlockedNonlinearNcp : public NcpProblem {
+class BlockedNonlinearNcp : public NonlinearNcp {
  public:
-  int size() const override { return inner_.size(); }
-  bool IsComplementarityRow(int row, double* scale) const override { return inner_.IsComplementarityRow(row, scale); }
-  int pattern_version() const override { return inner_.pattern_version(); }
-  void Evaluate(const Eigen::VectorXd& z, const NcpEvalMode& mode, Eigen::VectorXd* Phi,
-                Eigen::MatrixXd* J) const override {
-    inner_.Evaluate(z, mode, Phi, J);
-  }
-  void EvaluateSparse(const Eigen::VectorXd& z, const NcpEvalMode& mode, Eigen::VectorXd* Phi,
-                      SparseJacobian* J) const override {
-    inner_.EvaluateSparse(z, mode, Phi, J);
-  }
   void CondensableBlocks(std::vector<int>* starts, std::vector<int>* indices) const override {
     *starts = {0, 1};
     *indices = {2};
   }
-
- private:
-  NonlinearNcp inner_;
 };
 
 // The condensed direction is the uncondensed one up to rounding: the same iterations to the same solution.

@@ -12,10 +12,13 @@
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
+#include "ncp/test_ncp_problems.h"
+
 namespace implicit_sim {
 namespace {
 
 using SparseMatrix = Eigen::SparseMatrix<double>;
+using ncp_test::RandomVector;
 
 // The positions of a random n x n pattern: per column, a dominant entry (on the diagonal, or with `permuted` in a
 // random row of a row permutation) and `extra` more in random rows.
@@ -49,13 +52,6 @@ SparseMatrix RandomMatrix(int n, const std::vector<std::pair<int, int>>& pattern
   A.setFromTriplets(triplets.begin(), triplets.end());
   A.makeCompressed();
   return A;
-}
-
-Eigen::VectorXd RandomVector(int n, std::mt19937* rng) {
-  std::uniform_real_distribution<double> value(-1.0, 1.0);
-  Eigen::VectorXd b(n);
-  for (int i = 0; i < n; ++i) b[i] = value(*rng);
-  return b;
 }
 
 // |x - A^-1 b| / |A^-1 b| with A^-1 b from a dense LU with partial pivoting.

@@ -15,6 +15,22 @@
 namespace implicit_sim {
 namespace {
 
+// A random point z of the problem (normals kept away from zero, multipliers generic) and the start of a step of
+// 0.05 s from random velocities with the external wrench `wrench` (may be null); returns z.
+Eigen::VectorXd BeginAtRandomPoint(const Model& model, unsigned seed, const Eigen::VectorXd* wrench,
+                                   StepProblem* problem) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::VectorXd z(problem->size());
+  for (int i = 0; i < z.size(); ++i) z[i] = u(rng);
+  for (const PairBlock& blk : problem->blocks()) z.segment<3>(blk.offset + pair_index::kN) += Vec3(0.3, -0.2, 1.0);
+  State start = State::Initial(model);
+  for (int i = 0; i < start.v.size(); ++i) start.v[i] = 2.0 * u(rng);
+  problem->BeginStep(start, 0.05, wrench);
+  problem->ResetTangentAxes(z);
+  return z;
+}
+
 // Compares J with central differences of Phi column by column; reports the worst block by name. In sparse mode the
 // Jacobian comes from the sparse assembly (second evaluation: the recorded pattern replayed) with the friction rows
 // of the sparse solver (set_regular_separated_friction), and the dense Jacobian must equal it entry for entry.
@@ -25,18 +41,8 @@ void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, b
   Eigen::VectorXd center;
   StepProblem problem(model);
   problem.set_regular_separated_friction(sparse);
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Eigen::VectorXd z(problem.size());
-  for (int i = 0; i < z.size(); ++i) z[i] = u(rng);
-  for (const PairBlock& blk : problem.blocks()) {  // keep the normal away from zero and multipliers generic
-    z.segment<3>(blk.offset + pair_index::kN) += Vec3(0.3, -0.2, 1.0);
-  }
-  State start = State::Initial(model);
-  for (int i = 0; i < start.v.size(); ++i) start.v[i] = 2.0 * u(rng);
   const Eigen::VectorXd wrench = Eigen::VectorXd::Constant(model.nv(), 0.3);
-  problem.BeginStep(start, 0.05, &wrench);
-  problem.ResetTangentAxes(z);
+  const Eigen::VectorXd z = BeginAtRandomPoint(model, seed, &wrench, &problem);
   if (proximal_weight > 0.0) {  // a centre away from z
     center = z + Eigen::VectorXd::Constant(z.size(), 0.2);
     mode.proximal_weight = proximal_weight;
@@ -158,15 +164,7 @@ TEST(StepProblem, ProximalTermPerturbsOnlyTheForceAndFrictionRows) {
 void ExpectCondensableBlocksAreLocal(const Model& model, unsigned seed) {
   StepProblem problem(model);
   problem.set_regular_separated_friction(true);
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Eigen::VectorXd z(problem.size());
-  for (int i = 0; i < z.size(); ++i) z[i] = u(rng);
-  for (const PairBlock& blk : problem.blocks()) z.segment<3>(blk.offset + pair_index::kN) += Vec3(0.3, -0.2, 1.0);
-  State start = State::Initial(model);
-  for (int i = 0; i < start.v.size(); ++i) start.v[i] = 2.0 * u(rng);
-  problem.BeginStep(start, 0.05, nullptr);
-  problem.ResetTangentAxes(z);
+  const Eigen::VectorXd z = BeginAtRandomPoint(model, seed, nullptr, &problem);
   std::vector<int> starts, indices;
   problem.CondensableBlocks(&starts, &indices);
   ASSERT_EQ(starts.size(), problem.blocks().size() + 1);
