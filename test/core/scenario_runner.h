@@ -46,10 +46,10 @@ struct RunStats {
 
 using StepCallback = std::function<void(const Model&, const State&, const Data&, const StepReport&)>;
 
-inline RunStats RunScene(const Model& model, double h, double duration, const StepCallback& on_step = nullptr,
+inline RunStats RunScene(const Model& model, const StepperOptions& options, double duration,
+                         const StepCallback& on_step = nullptr,
                          Data::PairSelection selection = Data::PairSelection::kAuto) {
-  StepperOptions options;
-  options.h = h;
+  const double h = options.h;
   Data data(model, selection);
   State state = State::Initial(model);
   RunStats stats;
@@ -66,6 +66,20 @@ inline RunStats RunScene(const Model& model, double h, double duration, const St
   }
   stats.ke_final = KineticEnergy(model, state);
   return stats;
+}
+
+inline RunStats RunScene(const Model& model, double h, double duration, const StepCallback& on_step = nullptr,
+                         Data::PairSelection selection = Data::PairSelection::kAuto) {
+  StepperOptions options;
+  options.h = h;
+  return RunScene(model, options, duration, on_step, selection);
+}
+
+inline StepperOptions RattleOptions(double h) {
+  StepperOptions options;
+  options.h = h;
+  options.scheme = StepperOptions::Scheme::kRattle;
+  return options;
 }
 
 // Runs a two-body model (body 1 moving, body 0 fixed, one pair) and, at every step end where the pair is apart

@@ -7,7 +7,7 @@ namespace implicit_sim {
 
 IslandSolve::IslandSolve(const Model& model)
     : problem(model, /*all_pairs=*/false, /*all_bodies=*/false), dense_solver(0, false), sparse_solver(0, true),
-      z_backup(Data::kMaxSubstepDepth + 1) {
+      velocity_dense_solver(0, false), velocity_sparse_solver(0, true), z_backup(Data::kMaxSubstepDepth + 1) {
   problem.set_regular_separated_friction(true);  // keeps the Newton matrix regular at separated pairs
 }
 
@@ -36,7 +36,10 @@ void Data::LayOut(const std::vector<int>& pairs_in_ncp, const Eigen::VectorXd* z
 
 int Data::lm_fallbacks() const {
   int total = 0;
-  for (const auto& island : islands) total += island->dense_solver.lm_fallbacks() + island->sparse_solver.lm_fallbacks();
+  for (const auto& island : islands) {
+    total += island->dense_solver.lm_fallbacks() + island->sparse_solver.lm_fallbacks() +
+             island->velocity_dense_solver.lm_fallbacks() + island->velocity_sparse_solver.lm_fallbacks();
+  }
   return total;
 }
 

@@ -37,6 +37,7 @@ void SizeWorkspace(IslandSolve* island) {
   island->z_best.setZero(n);
   island->z_center.setZero(n);
   island->z_cold.setZero(n);
+  island->z_velocity.setZero(n);
   island->ncp_error_rows.setZero(n);
   for (Eigen::VectorXd& backup : island->z_backup) backup.setZero(n);
   island->contacts.resize(island->pairs.size());
@@ -110,6 +111,8 @@ void GatherIsland(const Data& data, IslandSolve* island) {
     island->z.segment(to.offset, to.size()) = data.z.segment(from.offset, from.size());
     local.set_tangent_axis(static_cast<int>(c), global.tangent_axes()[island->blocks[c]]);
   }
+  island->frame_known.resize(island->blocks.size());
+  for (size_t c = 0; c < island->blocks.size(); ++c) island->frame_known[c] = data.frame_known[island->blocks[c]];
   island->has_warm_start = data.has_warm_start;
 }
 

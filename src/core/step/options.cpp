@@ -12,6 +12,7 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr const char* kSolverNames[] = {"newton", "ipopt", nullptr};  // by StepperOptions::Solver
+constexpr const char* kSchemeNames[] = {"paper", "rattle", nullptr};  // by StepperOptions::Scheme
 
 using Options = StepperOptions;
 
@@ -20,6 +21,10 @@ using Options = StepperOptions;
 constexpr std::array<OptionRow, kNumOptionRows> kTable{{
     {"h", "time_step", "--dt", OptionKind::kReal, 0.01, 0.0, 1.0, true, false, "s", nullptr, "time step",
      [](const Options& o) { return o.h; }, [](Options* o, double x) { o->h = x; }},
+    {"scheme", "scheme", "--scheme", OptionKind::kChoice, 0.0, 0.0, 1.0, false, false, "", kSchemeNames,
+     "the time-stepping scheme: the paper's first-order step, or the second-order two-stage RATTLE step",
+     [](const Options& o) { return static_cast<double>(static_cast<int>(o.scheme)); },
+     [](Options* o, double x) { o->scheme = x == 1.0 ? Options::Scheme::kRattle : Options::Scheme::kPaper; }},
     {"solver", "solver", "--solver", OptionKind::kChoice, 0.0, 0.0, 1.0, false, false, "", kSolverNames,
      "the primary solver (Newton's retry ladder also tries Ipopt)",
      [](const Options& o) { return static_cast<double>(static_cast<int>(o.solver)); },

@@ -169,4 +169,38 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
   return best.summary();
 }
 
+NcpSummary SolveVelocityStage(const StepperOptions& options, IslandSolve* island, StepReport* report) {
+  StepProblem& problem = island->problem;
+  island->z_start = island->z_velocity;  // stage 1's initial guess is no longer needed
+  NcpSummary best = island->solver().Solve(problem, options.newton, &island->z_velocity);
+  Count(best, report);
+  if (best.converged) return best;
+  island->z_best = island->z_velocity;
+  NewtonOptions projected = options.newton;
+  projected.project_multipliers = true;
+  report->projected_solves++;
+  island->z_velocity = island->z_start;
+  NcpSummary summary = island->solver().Solve(problem, projected, &island->z_velocity);
+  Count(summary, report);
+  if (summary.converged) return summary;
+  if (summary.residual < best.residual || !std::isfinite(best.residual)) {
+    best = summary;
+    island->z_best = island->z_velocity;
+  }
+  report->smoothed_solves++;
+  island->z_velocity = island->z_start;
+  for (double mu = 1e-2; mu > 1e-9 && island->z_velocity.allFinite(); mu *= 0.1) {
+    summary = island->solver().Solve(problem, projected, &island->z_velocity, mu);
+    Count(summary, report);
+  }
+  if (island->z_velocity.allFinite()) {
+    summary = island->solver().Solve(problem, projected, &island->z_velocity);
+    Count(summary, report);
+    if (summary.converged) return summary;
+    if (summary.residual < best.residual || !std::isfinite(best.residual)) return summary;
+  }
+  island->z_velocity = island->z_best;
+  return best;
+}
+
 }  // namespace implicit_sim

@@ -126,7 +126,7 @@ void StepProblem::AddJointRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) c
     }
     if (!joint.has_coordinate()) continue;
     const JointGradient& G_q = joint_position_start_[j];
-    if (joint.applied_effort != 0.0) AddJointForce(G_q, joint.applied_effort, -1, 0.0, eP, eC, Phi);
+    if (joint.applied_effort != 0.0) AddJointForce(G_q, stage_share() * joint.applied_effort, -1, 0.0, eP, eC, Phi);
     if (joint.limited) AddJointLimitRows(joint, o + m, z, eP, eC, G_q, Phi);
     if (joint.friction > 0.0) AddJointFrictionRows(joint, o + m + (joint.limited ? 2 : 0), z, eP, eC, G_q, Phi);
     if (joint.damping > 0.0) AddJointDamping(joint, eP, eC, G_q, Phi);
@@ -167,16 +167,18 @@ void StepProblem::AddJointFrictionRows(const Joint& joint, int col, const Eigen:
     AddJ(col + 1, col + 1, fb.da);
     AddJ(col + 1, col, -2.0 * fb.db * s);
   }
-  AddJointForce(G_q, joint.friction * s, col, joint.friction, eP, eC, Phi);
+  const double bound = stage_share() * joint.friction;  // RATTLE stage 1 carries half the step's friction bound
+  AddJointForce(G_q, bound * s, col, bound, eP, eC, Phi);
 }
 
 // Viscous damping -c qdot along G_q, implicit in the end-of-step velocities.
 void StepProblem::AddJointDamping(const Joint& joint, const BodyEnd& eP, const BodyEnd& eC, const JointGradient& G_q,
                                   Eigen::VectorXd* Phi) const {
-  AddJointForce(G_q, -joint.damping * G_q.Rate(eP.v, eP.w, eC.v, eC.w), -1, 0.0, eP, eC, Phi);
+  const double damping = stage_share() * joint.damping;  // half in each RATTLE stage
+  AddJointForce(G_q, -damping * G_q.Rate(eP.v, eP.w, eC.v, eC.w), -1, 0.0, eP, eC, Phi);
   if (!WantJacobian()) return;
   // Body rows of P and C: + (c / Fs) G_q G_q^T over the velocity columns of P and C, in 3 x 3 blocks.
-  const double k = joint.damping / force_scale_;
+  const double k = damping / force_scale_;
   const Vec3 gP[2] = {G_q.dp_P, G_q.dth_P}, gC[2] = {G_q.dp_C, G_q.dth_C};
   for (const auto& [row, g_row] : {std::make_pair(eP.col, gP), std::make_pair(eC.col, gC)}) {
     for (int i = 0; row >= 0 && i < 2; ++i) {

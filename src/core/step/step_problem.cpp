@@ -16,6 +16,9 @@ StepProblem::StepProblem(const Model& model, bool all_pairs, bool all_bodies)
   joint_position_start_.resize(model.joints.size());
   joint_bodies_.resize(model.joints.size());
   joint_offset_.assign(model.joints.size(), -1);
+  joint_equality_end_.resize(model.joints.size());
+  joint_position_end_.resize(model.joints.size());
+  limit_closed_.assign(model.joints.size(), {0, 0});
   for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
     if (model.velocity_slot[b] < 0) fixed_bodies_.push_back(b);
   }
@@ -45,6 +48,7 @@ void StepProblem::SetBodies(const std::vector<int>& slots, const std::vector<int
   bodies_.insert(bodies_.end(), fixed_bodies_.begin() + f, fixed_bodies_.end());
   start_.assign(bodies_.size(), BodyStep());
   end_.assign(bodies_.size(), BodyEnd());
+  half_.assign(bodies_.size(), BodyHalf());
   slot_body_.assign(slots_.size(), -1);
   locked_row_.assign(6 * slots_.size(), 0);
   external_wrench_W_.setZero(6 * slots_.size());
@@ -99,6 +103,12 @@ void StepProblem::SetActivePairs(const std::vector<int>& pairs, const Eigen::Vec
     size_ += block.size();
   }
   tangent_axis_.assign(blocks_.size(), Vec3::UnitX());
+  use_start_frame_.assign(blocks_.size(), 0);
+  closed_.assign(blocks_.size(), 0);
+  stage1_force_.assign(blocks_.size(), Vec3::Zero());
+  stage1_torsion_.assign(blocks_.size(), Vec3::Zero());
+  frame_z_.setZero(size_);
+  stage1_z_.setZero(size_);
   complementarity_kind_.assign(size_, 0);
   for (int j : joints_) {
     const Joint& joint = model_.joints[j];
@@ -110,6 +120,7 @@ void StepProblem::SetActivePairs(const std::vector<int>& pairs, const Eigen::Vec
     for (int i = blk.offset + pi::kAlpha; i < blk.offset + blk.size(); ++i) complementarity_kind_[i] = 1;
     complementarity_kind_[blk.ln()] = 2;  // the normal force enters as ln / Fs
   }
+  velocity_kind_ = complementarity_kind_;
   ++pattern_version_;
   // Carry the old solution over: the body part, and the blocks of the pairs that stay (both lists are ascending).
   z_new->setZero(size_);
@@ -133,8 +144,9 @@ void StepProblem::ActivePairs(std::vector<int>* pairs) const {
 }
 
 bool StepProblem::IsComplementarityRow(int row, double* scale) const {
-  *scale = complementarity_kind_[row] == 2 ? 1.0 / force_scale_ : 1.0;
-  return complementarity_kind_[row] != 0;
+  const std::vector<char>& kind = stage_ == StepStage::kVelocity ? velocity_kind_ : complementarity_kind_;
+  *scale = kind[row] == 2 ? 1.0 / force_scale_ : 1.0;
+  return kind[row] != 0;
 }
 
 void StepProblem::CondensableBlocks(std::vector<int>* starts, std::vector<int>* indices) const {
@@ -178,6 +190,16 @@ void StepProblem::UpdateBodies(const Eigen::VectorXd& z) const {
   for (size_t b = 0; b < end_.size(); ++b) {
     BodyEnd& e = end_[b];
     const BodyStep& s = start_[b];
+    if (stage_ == StepStage::kVelocity) {  // stage 2: the geometry is fixed at the end of stage 1
+      e.p = half_[b].p1;
+      e.R = half_[b].R1;
+      if (e.col >= 0) {
+        e.v = z.segment<3>(e.col);
+        e.w = z.segment<3>(e.col + 3);
+      }
+      e.dtheta_dw.setZero();
+      continue;
+    }
     if (e.col < 0) {
       e.p = s.p0;
       e.R = s.R0;
@@ -247,9 +269,15 @@ void StepProblem::AddJUnlocked(int row, int col, double value) const {
 void StepProblem::EvaluateAll(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const {
   UpdateBodies(z);
   Phi->setZero(size_);
-  AddBodyRows(z, Phi);
-  AddJointRows(z, Phi);
-  for (size_t c = 0; c < blocks_.size(); ++c) AddPair(static_cast<int>(c), z, Phi);
+  if (stage_ == StepStage::kVelocity) {
+    AddBodyRowsVelocityStage(z, Phi);
+    AddJointRowsVelocityStage(z, Phi);
+    for (size_t c = 0; c < blocks_.size(); ++c) AddPairVelocityStage(static_cast<int>(c), z, Phi);
+  } else {
+    AddBodyRows(z, Phi);
+    AddJointRows(z, Phi);
+    for (size_t c = 0; c < blocks_.size(); ++c) AddPair(static_cast<int>(c), z, Phi);
+  }
   // Locked degrees of freedom: the row of a locked velocity becomes "velocity = 0" (AddJ skipped its other entries).
   for (int row = 0; row < static_cast<int>(locked_row_.size()); ++row) {
     if (!locked_row_[row]) continue;
@@ -285,15 +313,25 @@ void StepProblem::AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) co
     const int row = static_cast<int>(6 * i);
     const Vec3 f_ext = body.mass * model_.gravity_W + body.f_applied_W + external_wrench_W_.segment<3>(row);
     const Vec3 tau_ext = body.tau_applied_W + external_wrench_W_.segment<3>(row + 3);
+    const BodyEnd& e = end_[slot_body_[i]];
+    AddJ(row, row, Mat3(Mat3::Identity() * body.mass / (h_ * Fs)));
+    if (stage_ == StepStage::kPosition) {
+      // RATTLE stage 1: m (v_half - v0) = h/2 f + impulses, and the Lie-group variational (Moser-Veselov) rotation
+      // row L_disc(w_half) = L0 + h/2 tau + impulse moments (doc/method.md, "The second-order step").
+      Phi->segment<3>(row) = (body.mass * (z.segment<3>(row) - s.v0) / h_ - 0.5 * f_ext) / Fs;
+      Mat3 dL_dtheta;
+      const Vec3 L_half = DiscreteMomentum(body.I_B, s.R0, e.R, h_, &dL_dtheta);
+      Phi->segment<3>(row + 3) = ((L_half - s.I_W0 * s.w0) / h_ - 0.5 * tau_ext) / Fs;
+      AddJ(row + 3, row + 3, Mat3(dL_dtheta * e.dtheta_dw / (h_ * Fs)));
+      continue;
+    }
     Phi->segment<3>(row) = (body.mass * (z.segment<3>(row) - s.v0) / h_ - f_ext) / Fs;
     // Angular momentum form: (I_W(R1) w1 - I_W(R0) w0) / h = torque, with the inertia at the end-of-step
     // orientation R1 = Exp(h w1) R0. It holds the gyroscopic effect implicitly and conserves angular momentum exactly
     // without torque (doc/method.md, pitfall 7).
-    const BodyEnd& e = end_[slot_body_[i]];
     const Mat3 I_W1 = e.R * body.I_B * e.R.transpose();
     const Vec3 w1 = z.segment<3>(row + 3);
     Phi->segment<3>(row + 3) = ((I_W1 * w1 - s.I_W0 * s.w0) / h_ - tau_ext) / Fs;
-    AddJ(row, row, Mat3(Mat3::Identity() * body.mass / (h_ * Fs)));
     // d(I_W w)/dtheta = I_W [w]x - [I_W w]x for R -> Exp(dtheta) R, and dtheta/dw1 = h J_l(h w1).
     AddJ(row + 3, row + 3, Mat3((I_W1 + (I_W1 * Skew(w1) - Skew(I_W1 * w1)) * e.dtheta_dw) / (h_ * Fs)));
   }
@@ -312,13 +350,14 @@ void StepProblem::AddContactWrench(int c, int local, double sign, const Vec3& r,
   Phi->segment<3>(row + 3) -= s * (r.cross(w.F) + w.lr * w.n);
   if (!WantJacobian()) return;
   const Mat3 rx = Skew(r), Fx = Skew(w.F);
-  AddJ(row, off + pi::kN, Mat3(-(s * w.dF_dn)));
+  const double moving = w.fixed_frame ? 0.0 : 1.0;  // a fixed frame emits the same entries, as zeros
+  AddJ(row, off + pi::kN, Mat3(-(moving * s * w.dF_dn)));
   AddJ(row, blk.ln(), Vec3(-(s * w.dF_dln)));
   AddJ(row, off + pi::kSt, Vec3(-(s * w.dF_dst)));
   AddJ(row, off + pi::kSo, Vec3(-(s * w.dF_dso)));
-  AddJ(row + 3, a_col, Mat3(s * Fx));         // d(r x F)/da = -[F]x
-  AddJ(row + 3, e.col, Mat3(-(s * h_ * Fx)));  // r = a - p0 - h v
-  AddJ(row + 3, off + pi::kN, Mat3(-(s * (rx * w.dF_dn + w.lr * Mat3::Identity()))));
+  AddJ(row + 3, a_col, Mat3(moving * s * Fx));         // d(r x F)/da = -[F]x
+  AddJ(row + 3, e.col, Mat3(-(moving * s * h_ * Fx)));  // r = a - p0 - h v
+  AddJ(row + 3, off + pi::kN, Mat3(-(moving * s * (rx * w.dF_dn + w.lr * Mat3::Identity()))));
   AddJ(row + 3, blk.ln(), Vec3(-(s * (rx * w.dF_dln + w.dlr_dln * w.n))));
   AddJ(row + 3, off + pi::kSt, Vec3(-(s * rx * w.dF_dst)));
   AddJ(row + 3, off + pi::kSo, Vec3(-(s * rx * w.dF_dso)));
@@ -398,16 +437,36 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
   TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
   const Vec3 v_rel = RelativeVelocity(e1.v, e1.w, r1, e2.v, e2.w, r2);
   const Vec3 w_rel = e1.w - e2.w;
-  // Adds coeff * u^T d(v_rel)/d(unknowns) to `row`.
-  auto add_rel_velocity = [&](int row, double coeff, const Vec3& u) {
+  // RATTLE stage 1 with a start frame (n0, t0, o0 and the levers r1_0, r2_0 of the start-of-step closest points):
+  // the impulse acts along it, and the slip is measured on the average of the start and end frames,
+  // u_bar = 1/2 (W(q0) + W(q1))^T nu (doc/method.md, "The second-order step"). end_weight is the end frame's share.
+  const bool start_frame = stage_ == StepStage::kPosition && use_start_frame_[c];
+  const double end_weight = start_frame ? 0.5 : 1.0;
+  Vec3 n0 = n, t0 = t, o0 = o, r1_0 = r1, r2_0 = r2;
+  if (start_frame) {
+    n0 = frame_z_.segment<3>(off + pi::kN);
+    Mat3 unused1, unused2;
+    TangentBasis(n0, tangent_axis_[c], &t0, &o0, &unused1, &unused2);
+    r1_0 = frame_z_.segment<3>(off + pi::kA1) - start_[blk.body1].p0;
+    r2_0 = frame_z_.segment<3>(off + pi::kA2) - start_[blk.body2].p0;
+  }
+  const Vec3 v_rel0 = RelativeVelocity(e1.v, e1.w, r1_0, e2.v, e2.w, r2_0);
+  const double start_weight = 1.0 - end_weight;
+  const double slip_t = end_weight * t.dot(v_rel) + start_weight * t0.dot(v_rel0);
+  const double slip_o = end_weight * o.dot(v_rel) + start_weight * o0.dot(v_rel0);
+  const Vec3 n_bar = end_weight * n + start_weight * n0;
+  // Adds coeff * u^T d(v_rel)/d(unknowns) to `row`, and the start frame's coeff0 * u0^T d(v_rel0)/d(nu).
+  auto add_rel_velocity = [&](int row, double coeff, const Vec3& u, double coeff0, const Vec3& u0) {
+    const Vec3 r0[2] = {r1_0, r2_0};
     const Side* both[2] = {&sides[1], &sides[0]};
     for (int i = 0; i < 2; ++i) {
       const Side& side = *both[i];
       if (side.e->col < 0) continue;
       const double s = i == 0 ? coeff : -coeff;
       add(row, side.a_col, Eigen::RowVector3d(s * u.transpose() * Skew(side.e->w)));
-      add(row, side.e->col, Eigen::RowVector3d(s * u.transpose() * (I3 - h_ * Skew(side.e->w))));
-      add(row, side.e->col + 3, Eigen::RowVector3d(-s * u.transpose() * Skew(side.r)));
+      const double s0 = i == 0 ? coeff0 : -coeff0;
+      add(row, side.e->col, Eigen::RowVector3d(s * u.transpose() * (I3 - h_ * Skew(side.e->w)) + s0 * u0.transpose()));
+      add(row, side.e->col + 3, Eigen::RowVector3d(-s * u.transpose() * Skew(side.r) - s0 * u0.transpose() * Skew(r0[i])));
     }
   };
   // At a separated contact (d > 0, so ln = 0) the friction fractions are physically void, and with no slip
@@ -424,9 +483,9 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
   const double sigma_eff = regular_separated_friction_ ? slip + std::max(d, 0.0) / h_ : slip;
   const double dsigma_dd = regular_separated_friction_ && d > 0.0 ? 1.0 / h_ : 0.0;
   const int rt = off + 10, ro = off + 11, rr = off + 12;
-  (*Phi)[rt] = fr.e_t * t.dot(v_rel) + st * sigma_eff;
-  (*Phi)[ro] = fr.e_o * o.dot(v_rel) + so * sigma_eff;
-  (*Phi)[rr] = fr.e_r * n.dot(w_rel) + sr * sigma_eff;
+  (*Phi)[rt] = fr.e_t * slip_t + st * sigma_eff;
+  (*Phi)[ro] = fr.e_o * slip_o + so * sigma_eff;
+  (*Phi)[rr] = fr.e_r * n_bar.dot(w_rel) + sr * sigma_eff;
   // The proximal rung's term (ncp_problem.h) on the friction rows, weight cp in m/s per unit of s.
   const double cp = eval_.mode.raw ? 0.0 : eval_.mode.proximal_weight;
   if (cp > 0.0) {
@@ -436,13 +495,13 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
     (*Phi)[rr] += cp * (sr - center[off + pi::kSr]);
   }
   if (want_J) {
-    add(rt, off + pi::kN, Eigen::RowVector3d(fr.e_t * v_rel.transpose() * dt_dn));
-    add(ro, off + pi::kN, Eigen::RowVector3d(fr.e_o * v_rel.transpose() * do_dn));
-    add(rr, off + pi::kN, Eigen::RowVector3d(fr.e_r * w_rel.transpose()));
-    add_rel_velocity(rt, fr.e_t, t);
-    add_rel_velocity(ro, fr.e_o, o);
-    if (e1.col >= 0) add(rr, e1.col + 3, Eigen::RowVector3d(fr.e_r * n.transpose()));
-    if (e2.col >= 0) add(rr, e2.col + 3, Eigen::RowVector3d(-fr.e_r * n.transpose()));
+    add(rt, off + pi::kN, Eigen::RowVector3d(end_weight * fr.e_t * v_rel.transpose() * dt_dn));
+    add(ro, off + pi::kN, Eigen::RowVector3d(end_weight * fr.e_o * v_rel.transpose() * do_dn));
+    add(rr, off + pi::kN, Eigen::RowVector3d(end_weight * fr.e_r * w_rel.transpose()));
+    add_rel_velocity(rt, end_weight * fr.e_t, t, start_weight * fr.e_t, t0);
+    add_rel_velocity(ro, end_weight * fr.e_o, o, start_weight * fr.e_o, o0);
+    if (e1.col >= 0) add(rr, e1.col + 3, Eigen::RowVector3d(fr.e_r * n_bar.transpose()));
+    if (e2.col >= 0) add(rr, e2.col + 3, Eigen::RowVector3d(-fr.e_r * n_bar.transpose()));
     // The diagonal entries carry the sparse solver's proximal regularization (never Phi).
     add1(rt, off + pi::kSt, sigma_eff + eval_.mode.regularization + cp);
     add1(ro, off + pi::kSo, sigma_eff + eval_.mode.regularization + cp);
@@ -474,20 +533,22 @@ void StepProblem::AddPair(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi)
 
   // The contact wrench on both bodies (paper eq. 1: W_n p_n + W_t p_t + W_o p_o + W_r p_r), with
   // lt = mu e_t ln s_t, lo = mu e_o ln s_o, lr = mu e_r ln s_r.
+  // In RATTLE stage 1 with a start frame, along n0, t0, o0 at the start levers (no derivative by n, a or v).
   ContactWrench w;
-  w.n = n;
+  w.n = n0;
+  w.fixed_frame = start_frame;
   const double mu = fr.mu;
-  const Vec3 friction_dir = mu * (fr.e_t * st * t + fr.e_o * so * o);
-  w.F = ln * (n + friction_dir);
+  const Vec3 friction_dir = mu * (fr.e_t * st * t0 + fr.e_o * so * o0);
+  w.F = ln * (n0 + friction_dir);
   w.dF_dn = ln * (I3 + mu * (fr.e_t * st * dt_dn + fr.e_o * so * do_dn));
-  w.dF_dln = n + friction_dir;
-  w.dF_dst = mu * fr.e_t * ln * t;
-  w.dF_dso = mu * fr.e_o * ln * o;
+  w.dF_dln = n0 + friction_dir;
+  w.dF_dst = mu * fr.e_t * ln * t0;
+  w.dF_dso = mu * fr.e_o * ln * o0;
   w.lr = mu * fr.e_r * ln * sr;
   w.dlr_dln = mu * fr.e_r * sr;
   w.dlr_dsr = mu * fr.e_r * ln;
-  AddContactWrench(c, blk.body1, +1.0, r1, w, Phi);
-  AddContactWrench(c, blk.body2, -1.0, r2, w, Phi);
+  AddContactWrench(c, blk.body1, +1.0, r1_0, w, Phi);
+  AddContactWrench(c, blk.body2, -1.0, r2_0, w, Phi);
 }
 
 void StepProblem::Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>* contacts) const {

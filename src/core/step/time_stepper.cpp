@@ -28,19 +28,21 @@
 namespace implicit_sim {
 namespace {
 
-// The state of the island's bodies at the end of the step from the solution z: the poses of paper eq. 2, the
-// velocities of z. Quaternion signs follow the previous ones, so q is continuous in time. (state->t is Step's.)
-void WriteState(const Model& model, const StepProblem& problem, const Eigen::VectorXd& z, State* state) {
+// The state of the island's bodies at the end of the step: the poses of paper eq. 2 from the velocities of z_pose,
+// the velocities of z_velocity (the same solution in the paper's step; stage 1 and stage 2 in the RATTLE step).
+// Quaternion signs follow the previous ones, so q is continuous in time. (state->t is Step's.)
+void WriteState(const Model& model, const StepProblem& problem, const Eigen::VectorXd& z_pose,
+                const Eigen::VectorXd& z_velocity, State* state) {
   const std::vector<int>& slots = problem.slots();
   for (size_t i = 0; i < slots.size(); ++i) {
-    const Pose X = problem.EndPose(model.moving_bodies[slots[i]], z);
+    const Pose X = problem.EndPose(model.moving_bodies[slots[i]], z_pose);
     Eigen::Quaterniond quat(X.linear());
     const int iq = Model::q_offset(slots[i]), iv = Model::v_offset(slots[i]);
     const Eigen::Vector4d old = state->q.segment<4>(iq + 3);
     if (quat.w() * old[0] + quat.x() * old[1] + quat.y() * old[2] + quat.z() * old[3] < 0.0) quat.coeffs() *= -1.0;
     state->q.segment<3>(iq) = X.translation();
     state->q.segment<4>(iq + 3) << quat.w(), quat.x(), quat.y(), quat.z();
-    state->v.segment<6>(iv) = z.segment<6>(6 * i);
+    state->v.segment<6>(iv) = z_velocity.segment<6>(6 * i);
   }
 }
 
@@ -49,6 +51,8 @@ void SetPairs(const Model& model, const State& state, const std::vector<int>& pa
   StepProblem& problem = data->problem;
   data->LayOut(pairs, &data->z);
   data->z.swap(data->z_remap);
+  data->frame_known.assign(problem.blocks().size(), 1);
+  for (int c : data->new_blocks) data->frame_known[c] = 0;
   for (int c : data->new_blocks) {
     SeedPair(model, state, c, problem, &data->z, /*use_oracle=*/false);
     problem.ResetTangentAxis(c, data->z);
@@ -161,6 +165,25 @@ struct IslandStepInputs {
   State* state;  // each island reads and writes only its own bodies' slots
 };
 
+// The rest of a RATTLE step after stage 1 left its solution in island->z: the pairs whose active inequalities changed
+// fall back to the end frame and stage 1 is solved again (if it had converged); then stage 2 from stage 1 repeated.
+// Returns whether both converged; the problem is left in stage 1.
+bool FinishRattleStep(const StepperOptions& options, bool stage1_converged, IslandSolve* island, StepReport* report) {
+  StepProblem& problem = island->problem;
+  bool converged = stage1_converged;
+  if (converged && problem.FallBackWhereActiveSetsChanged(island->z) > 0) {
+    const NcpSummary again = island->solver().Solve(problem, options.newton, &island->z);
+    report->iterations += again.iterations;
+    report->residual_evaluations += again.residual_evaluations;
+    converged = again.converged;
+  }
+  problem.BeginVelocityStage(island->z, &island->z_velocity);
+  const NcpSummary velocity = SolveVelocityStage(options, island, report);
+  problem.set_stage(StepStage::kPosition);
+  report->residual = std::max(report->residual, velocity.residual);
+  return converged && velocity.converged && island->z_velocity.allFinite();
+}
+
 // Advances the island's bodies in *state by h; when the solve fails, by two halves instead, down to
 // h / 2^kMaxSubstepDepth, where the best finite iterate is accepted and reported as not converged. Returns false if
 // the island could not be advanced.
@@ -173,7 +196,13 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
   Eigen::VectorXd& backup = island->z_backup[depth];
   backup = island->z;
   const bool had_warm_start = island->has_warm_start;
+  const bool rattle = options.scheme == StepperOptions::Scheme::kRattle;
   problem.BeginStep(*state, h, in.wrench);
+  problem.set_stage(rattle ? StepStage::kPosition : StepStage::kWhole);
+  if (rattle) {  // start frames from the warm start: the previous step's closest points, at this step's start
+    if (!island->has_warm_start) std::fill(island->frame_known.begin(), island->frame_known.end(), 0);
+    problem.SetStartFrames(island->z, island->frame_known);
+  }
   const bool last_chance = depth == Data::kMaxSubstepDepth;
   NcpSummary result = SolveWithRetryLadder(model, options, *state, island, last_chance, report);
   // A solution in which a body passed through another is no solution of the step (tunnelling): solve again from a
@@ -188,6 +217,8 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
     report->crossings++;
     result.converged = false;
   }
+  if (rattle && island->z.allFinite()) result.converged = FinishRattleStep(options, result.converged, island, report);
+  const Eigen::VectorXd& z_velocity = rattle ? island->z_velocity : island->z;
   if (!result.converged && depth < Data::kMaxSubstepDepth) {
     island->z = backup;
     island->has_warm_start = had_warm_start && !crossed;
@@ -201,7 +232,7 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
   }
   // Even the shortest sub-step crossed: refuse the step rather than let the body through (unless its velocities are
   // beyond the health limits: Step then refuses it as diverged, the more telling fault).
-  if (crossed && !ExceedsSpeedLimits(options, problem, island->z)) {
+  if (crossed && !ExceedsSpeedLimits(options, problem, z_velocity)) {
     island->has_warm_start = false;
     report->converged = false;
     report->fault = StepFault::kCrossing;
@@ -212,9 +243,16 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
   report->residual = std::max(report->residual, result.residual);
   const NcpError error = ComputeNcpError(problem, island->z, &island->ncp_error_rows);
   report->complementarity_error = std::max(report->complementarity_error, error.complementarity);
-  problem.Contacts(island->z, &island->contacts);
-  WriteState(model, problem, island->z, state);
+  if (rattle) {  // the contact results of the step: stage 1's closest points, the total forces of stage 2
+    problem.set_stage(StepStage::kVelocity);
+    const NcpError velocity_error = ComputeNcpError(problem, z_velocity, &island->ncp_error_rows);
+    report->complementarity_error = std::max(report->complementarity_error, velocity_error.complementarity);
+  }
+  problem.Contacts(z_velocity, &island->contacts);
+  problem.set_stage(rattle ? StepStage::kPosition : StepStage::kWhole);
+  WriteState(model, problem, island->z, z_velocity, state);
   island->has_warm_start = true;
+  std::fill(island->frame_known.begin(), island->frame_known.end(), 1);  // z is a solution at the new start
   return true;
 }
 
@@ -286,9 +324,13 @@ bool Advance(const Model& model, const StepperOptions& options, const Eigen::Vec
   data->forced_pairs.clear();
   const bool had_warm_start = data->has_warm_start;
   for (int round = 1;; ++round) {
+    // The pairs whose closest points in z are at the step's start (RATTLE's start frames): the previous step's, not
+    // a new pair's (SetPairs) nor those a repeated round carries from the end of the step.
+    data->frame_known.assign(data->problem.blocks().size(), round == 1 ? 1 : 0);
     if (data->broad_phase) {
       data->problem.BeginStep(*state, options.h, wrench);  // for the seeds of new pairs
       SelectPairs(model, options, options.h, *state, data);
+      if (round > 1) std::fill(data->frame_known.begin(), data->frame_known.end(), 0);
     }
     report->pairs_in_ncp = static_cast<int>(data->problem.blocks().size());
     if (!SolveIslands(model, options, wrench, state, data, report)) return false;

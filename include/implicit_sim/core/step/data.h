@@ -43,7 +43,13 @@ struct IslandSolve {
   // dense LU would cost O(n^3) per iteration (a pile, or a 1000-gon disc: one pair with about 1000 unknowns) ---
   StepProblem problem;
   SemismoothNewton dense_solver, sparse_solver;
-  SemismoothNewton& solver() { return problem.size() > kDenseSizeLimit ? sparse_solver : dense_solver; }
+  // The RATTLE step's velocity stage has Jacobians of another pattern: solvers of its own keep both analyses.
+  SemismoothNewton velocity_dense_solver, velocity_sparse_solver;
+  SemismoothNewton& solver() {
+    const bool sparse = problem.size() > kDenseSizeLimit;
+    if (problem.stage() == StepStage::kVelocity) return sparse ? velocity_sparse_solver : velocity_dense_solver;
+    return sparse ? sparse_solver : dense_solver;
+  }
   BlockPredictor predictor;  // StepperOptions::predictor_sweeps
   static constexpr int kDenseSizeLimit = 200;
   // --- the warm start (gathered from Data::z) and the workspace of the island's retry ladder and sub-steps ---
@@ -54,6 +60,10 @@ struct IslandSolve {
   Eigen::VectorXd z_center;        // the proximal rung's centre
   Eigen::VectorXd z_cold;          // the cold attempt's end, kept across the proximal rung for the continuation
   Eigen::VectorXd ncp_error_rows;  // the raw rows of the accepted solution (ncp_error.h)
+  // RATTLE: per block, whether z holds the pair's closest points at the start of the step (its start frame), and the
+  // velocity stage's solution (z then holds stage 1's, the warm start of the next step).
+  std::vector<char> frame_known;
+  Eigen::VectorXd z_velocity;
   std::vector<Vec3> axes_warm_failed;
   std::vector<Eigen::VectorXd> z_backup;  // per sub-step depth
   // --- outputs of the island's step ---
@@ -103,6 +113,8 @@ class Data {
   std::vector<Pose> X_WB;
   std::vector<double> inflation;
   Eigen::VectorXd z_remap;
+  // RATTLE: per pair of the NCP, whether z holds its closest points at the start of the step (see IslandSolve).
+  std::vector<char> frame_known;
   // --- outputs: the contact results of the last step, one per pair in its NCP (contacts[i].pair is the model
   // pair). With every pair in the NCP, contacts[c] belongs to model pair c. ---
   std::vector<ContactResult> contacts;

@@ -14,7 +14,12 @@ namespace implicit_sim {
 
 struct StepperOptions {
   enum class Solver { kNewton, kIpopt };
+  // kPaper: the paper's first-order step (one NCP, everything at the end of the step). kRattle: the two-stage
+  // second-order step of doc/method.md ("The second-order step"): the same end-of-step contact, energy-conserving
+  // smooth motion.
+  enum class Scheme { kPaper, kRattle };
   double h = 0.01;                // time step (s), in (0, 1]
+  Scheme scheme = Scheme::kPaper;
   Solver solver = Solver::kNewton;  // the primary solver; Newton's retry ladder also tries Ipopt
   NewtonOptions newton;
   int ipopt_max_iterations = 500; // [1, 100000]
@@ -70,7 +75,7 @@ struct OptionRow {
   void (*set)(StepperOptions* options, double value);
 };
 
-constexpr int kNumOptionRows = 22;
+constexpr int kNumOptionRows = 23;
 const std::array<OptionRow, kNumOptionRows>& OptionTable();
 
 // The row with this field, ROS parameter or runner flag; nullptr when none (an empty name finds nothing).

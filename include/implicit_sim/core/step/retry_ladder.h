@@ -11,6 +11,7 @@
 //   4. Ipopt on the complementarity-penalty NLP (ncp/ipopt_ncp.h) from the best of rungs 1-2, polished by Newton.
 // Without a warm start the ladder begins at rung 2. With the Ipopt solver as the primary one it stops after rung 2.
 // When every rung fails the best finite iterate is kept; the stepper then splits the step (time_stepper.h).
+// The RATTLE step's velocity stage has a ladder of its own (SolveVelocityStage), and its failure splits the step too.
 #pragma once
 
 #include "implicit_sim/core/model/model.h"
@@ -29,5 +30,10 @@ namespace implicit_sim {
 // size it costs seconds and halving the step first is cheaper.
 NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& options, const State& state,
                                 IslandSolve* island, bool last_chance, StepReport* report);
+
+// The velocity stage of the RATTLE step (island->problem in StepStage::kVelocity, its initial guess in
+// island->z_velocity from BeginVelocityStage): Newton from that guess; again with projected multipliers; a smoothing
+// continuation from it. Leaves the best iterate in island->z_velocity and counts the rungs in *report.
+NcpSummary SolveVelocityStage(const StepperOptions& options, IslandSolve* island, StepReport* report);
 
 }  // namespace implicit_sim

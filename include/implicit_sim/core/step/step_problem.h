@@ -69,6 +69,17 @@ struct PairBlock {
 
 struct ContactResult;  // step/data.h
 
+// The stage of a step the problem states (StepperOptions::scheme; doc/method.md, "The second-order step"):
+//   kWhole     the paper's step: impulses, levers and inertia at the END of the step (first order);
+//   kPosition  stage 1 of the RATTLE step: the same unknowns, rows at half impulses (m (v_half - v0) / h = f / 2 + ...),
+//              the contact impulse along the START-of-step frame, the slip on the average of the start and end frames,
+//              the Lie-group variational rotation row; the closest points and the gap stay at the END of the step;
+//   kVelocity  stage 2: the velocities at the fixed end-of-step geometry of stage 1 (BeginVelocityStage). A pair block
+//              holds its frozen closest-point unknowns (rows z - z_stage1 = 0) and, in the ln, s_t, s_o, s_r, sigma
+//              slots, the TOTAL normal force, friction fractions and slip speed of the step; joint blocks hold the
+//              stage-2 equality multipliers and the total limit and friction unknowns.
+enum class StepStage { kWhole = 0, kPosition = 1, kVelocity = 2 };
+
 class StepProblem final : public NcpProblem {
  public:
   // Every moving body and joint of the model; with all_pairs every model pair too, otherwise none until SetActivePairs.
@@ -101,8 +112,25 @@ class StepProblem final : public NcpProblem {
   // the blocks of new pairs are zero and their indices (into blocks()) are listed in *new_blocks.
   void SetActivePairs(const std::vector<int>& pairs, const Eigen::VectorXd* z_old, Eigen::VectorXd* z_new,
                       std::vector<int>* new_blocks);
-  // Changes whenever the layout (and so the sparsity pattern of the Jacobian) changes.
-  int pattern_version() const override { return pattern_version_; }
+  // Changes whenever the layout or the stage (and so the sparsity pattern of the Jacobian) changes.
+  int pattern_version() const override { return 3 * pattern_version_ + static_cast<int>(stage_); }
+
+  // --- the RATTLE step (StepStage; implemented in step_rattle.cpp) ---
+  StepStage stage() const { return stage_; }
+  void set_stage(StepStage stage) { stage_ = stage; }
+  // Stage 1's start-of-step contact frames from z_start, a solution at the start of the step (the previous step's
+  // stage 1): per block whose entry of `known` is nonzero, its normal and closest points. A block without (a new pair)
+  // uses the end-of-step frame like the paper's step. Call after BeginStep.
+  void SetStartFrames(const Eigen::VectorXd& z_start, const std::vector<char>& known);
+  bool uses_start_frame(int block) const { return use_start_frame_[block] != 0; }
+  // After a stage-1 solution z: the pairs with a start frame whose active inequalities (alpha, beta > 0) differ from
+  // the start's (a vertex or face switch of a polytope) fall back to the end-of-step frame; returns how many.
+  int FallBackWhereActiveSetsChanged(const Eigen::VectorXd& z);
+  // Fixes the end-of-step geometry of the stage-1 solution z1 for stage 2 (poses, closest points, the stage-1
+  // impulses, which pairs and joint limits are closed) and writes stage 2's initial guess into *z2: stage 1 repeated
+  // (totals 2 x stage 1's force, the same fractions and slip, v1 = 2 v_half - v0), which Newton finishes in a few
+  // iterations. Leaves the problem in kVelocity.
+  void BeginVelocityStage(const Eigen::VectorXd& z1, Eigen::VectorXd* z2);
 
   // Stores the start-of-step quantities (poses, velocities, world inertia) and the external wrenches
   // of the step: 6 values per moving body slot (force N, torque N m; world frame, at the centre of mass), or null.
@@ -184,6 +212,15 @@ class StepProblem final : public NcpProblem {
   };
 
   void UpdateBodies(const Eigen::VectorXd& z) const;
+  // Stage 1's rotation row: the discrete angular momentum (1/h) R0 vee(F Jd - Jd F^T), F = R0^T R1, of a body with
+  // body inertia I_B, and its derivative with respect to the end-of-step rotation increment theta (R1 -> Exp(theta) R1).
+  static Vec3 DiscreteMomentum(const Mat3& I_B, const Mat3& R0, const Mat3& R1, double h, Mat3* dL_dtheta);
+  void AddBodyRowsVelocityStage(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const;
+  void AddPairVelocityStage(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const;
+  void AddJointRowsVelocityStage(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const;
+  // The share of a constant joint effort, joint friction bound and damping in the current stage (1/2 in each RATTLE
+  // stage, 1 in the paper's step).
+  double stage_share() const { return stage_ == StepStage::kWhole ? 1.0 : 0.5; }
   // The index of model body b in bodies_ (-1 if absent).
   int LocalBody(int body) const;
   // `local`: an index into bodies_.
@@ -225,6 +262,7 @@ class StepProblem final : public NcpProblem {
     Vec3 n, F, dF_dln, dF_dst, dF_dso;
     Mat3 dF_dn;
     double lr, dlr_dln, dlr_dsr;
+    bool fixed_frame = false;  // n and the lever are constants (stage 1's start frame): no derivative by n, a or v
   };
   void AddContactWrench(int c, int local, double sign, const Vec3& r, const ContactWrench& wrench,
                         Eigen::VectorXd* Phi) const;
@@ -263,6 +301,26 @@ class StepProblem final : public NcpProblem {
     SparseJacobian* J_sparse = nullptr;
   };
   mutable EvalContext eval_;
+  // --- the RATTLE step ---
+  StepStage stage_ = StepStage::kWhole;
+  std::vector<char> use_start_frame_;  // per block: stage 1 acts along the start frame
+  Eigen::VectorXd frame_z_;           // the start-of-step solution the start frames come from
+  // Stage 2's fixed geometry, per entry of bodies_: the end pose, v_half and the momentum of stage 1.
+  struct BodyHalf {
+    Vec3 p1 = Vec3::Zero();
+    Mat3 R1 = Mat3::Identity();
+    Vec3 v_half = Vec3::Zero(), L_half = Vec3::Zero();
+  };
+  std::vector<BodyHalf> half_;
+  // Stage 2 per block: the stage-1 solution's block (the frozen closest points, ln, s, sigma), its force on body 1
+  // and torsion vector, and whether the pair is closed at the end of stage 1.
+  Eigen::VectorXd stage1_z_;
+  std::vector<Vec3> stage1_force_, stage1_torsion_;
+  std::vector<char> closed_;
+  std::vector<char> velocity_kind_;  // complementarity_kind_ of stage 2 (closed pairs and limits only)
+  std::vector<std::array<JointGradient, 6>> joint_equality_end_;  // per joint: the gradients at the end of stage 1
+  std::vector<JointGradient> joint_position_end_;
+  std::vector<std::array<char, 2>> limit_closed_;  // per joint: lower, upper limit closed at the end of stage 1
 };
 
 }  // namespace implicit_sim
