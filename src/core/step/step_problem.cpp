@@ -109,6 +109,7 @@ void StepProblem::SetActivePairs(const std::vector<int>& pairs, const Eigen::Vec
   stage1_torsion_.assign(blocks_.size(), Vec3::Zero());
   frame_z_.setZero(size_);
   stage1_z_.setZero(size_);
+  stage1_rows_.setZero(size_);
   complementarity_kind_.assign(size_, 0);
   for (int j : joints_) {
     const Joint& joint = model_.joints[j];

@@ -84,7 +84,8 @@ int StepProblem::FallBackWhereActiveSetsChanged(const Eigen::VectorXd& z) {
 
 void StepProblem::BeginVelocityStage(const Eigen::VectorXd& z1, Eigen::VectorXd* z2) {
   stage_ = StepStage::kPosition;
-  UpdateBodies(z1);
+  eval_ = EvalContext();
+  EvaluateAll(z1, &stage1_rows_);  // also updates the end-of-step bodies
   stage1_z_ = z1;
   *z2 = z1;
   for (size_t b = 0; b < bodies_.size(); ++b) {
@@ -94,8 +95,12 @@ void StepProblem::BeginVelocityStage(const Eigen::VectorXd& z1, Eigen::VectorXd*
     half.p1 = e.p;
     half.R1 = e.R;
     if (e.col < 0) continue;
-    half.v_half = e.v;
-    half.L_half = DiscreteMomentum(model_.bodies[bodies_[b]].I_B, s.R0, e.R, h_, nullptr);
+    // The momenta after stage 1's impulses, m v0 + h f / 2 + impulses and L0 + h tau / 2 + moments: stage 1's rows
+    // less their residual, so that stage 2 conserves momentum to round-off whatever tolerance stage 1 met.
+    const Body& body = model_.bodies[bodies_[b]];
+    const double hFs = h_ * force_scale_;
+    half.v_half = e.v - hFs / body.mass * stage1_rows_.segment<3>(e.col);
+    half.L_half = DiscreteMomentum(body.I_B, s.R0, e.R, h_, nullptr) - hFs * stage1_rows_.segment<3>(e.col + 3);
     z2->segment<3>(e.col) = 2.0 * e.v - s.v0;
     z2->segment<3>(e.col + 3) = 2.0 * e.w - s.w0;
   }

@@ -91,8 +91,8 @@ TEST(Options, NodeAndRunnerNamesAreUniqueAndFindTheirRow) {
       EXPECT_EQ(FindOptionByRunnerFlag(row.runner_flag), &row);
     }
   }
-  EXPECT_EQ(params, (std::set<std::string>{"time_step", "solver", "tolerance", "max_iterations", "threads"}));
-  EXPECT_EQ(flags, (std::set<std::string>{"--dt", "--solver", "--tolerance", "--max-iterations", "--threads"}));
+  EXPECT_EQ(params, (std::set<std::string>{"time_step", "scheme", "solver", "tolerance", "max_iterations", "threads"}));
+  EXPECT_EQ(flags, (std::set<std::string>{"--dt", "--scheme", "--solver", "--tolerance", "--max-iterations", "--threads"}));
   EXPECT_EQ(FindOptionByRosParam(""), nullptr);
   EXPECT_EQ(FindOptionByRunnerFlag("--bogus"), nullptr);
 }

@@ -3,6 +3,7 @@
 // oscillates about its true value (bounded both ways); impacts only dissipate.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include <gtest/gtest.h>
 
@@ -60,10 +61,107 @@ RockingRun Rock(const StepperOptions& options, double duration, double lift = 0.
   return out;
 }
 
-TEST(RattleEnergy, RockingEllipsoid) {
+// The bars: drift at 10 s within 5e-3 / 1e-5 of the rocking energy, peak-to-peak within 2e-2 / 3e-4, no
+// penetration. Measured -2.45e-3 / -4.86e-6 and 1.40e-2 / 1.39e-4, as the reference statement predicts
+// (../shared/reference/rattle_rocking_reference.py: -2.5e-3, 1.4e-2; -4.9e-6, 1.4e-4). The paper's step keeps none of
+// it at h = 0.01 and 0.9 % at h = 0.001 (test_time_stepper.cpp).
+TEST(RattleEnergy, RockingEllipsoidKeepsItsEnergyToSecondOrder) {
+  const double drift_bar[2] = {5e-3, 1e-5}, peak_bar[2] = {2e-2, 3e-4};
+  const double hs[2] = {0.01, 0.001};
+  for (int i = 0; i < 2; ++i) {
+    const RockingRun r = Rock(RattleOptions(hs[i]), 10.0);
+    std::printf("[ rattle ] rocking ellipsoid h = %g: drift %.3g, peak-to-peak %.3g of the rocking energy, "
+                "penetration %.2g m\n", hs[i], r.drift, r.peak_to_peak, r.max_penetration);
+    EXPECT_EQ(r.nonconverged, 0);
+    EXPECT_LE(std::abs(r.drift), drift_bar[i]) << "h = " << hs[i];
+    EXPECT_LE(r.peak_to_peak, peak_bar[i]) << "h = " << hs[i];
+    EXPECT_GT(r.peak_to_peak, 0.01 * peak_bar[i]) << "h = " << hs[i];  // it oscillates, as a symplectic step does
+    EXPECT_LE(r.max_penetration, 1e-8);
+    EXPECT_GE(r.end.q[2], 0.0);  // independent check: the centre stays above the ground
+  }
+}
+
+// Independent check of non-penetration on the rocking run: the ellipsoid's lowest point (support function, closed
+// form) never goes below the ground plane by more than 1e-8 m.
+TEST(RattleEnergy, RockingEllipsoidNeverPenetratesByItsSupportPoint) {
+  const Model model = RockingEllipsoid();
+  double lowest_z = 1.0;
+  RunScene(model, RattleOptions(0.01), 3.0, [&](const Model& m, const State& s, const Data&, const StepReport&) {
+    Vec3 lowest;
+    SupportPoint(m.bodies[1].shape, s.X_WB(m, 1), -Vec3::UnitZ(), &lowest);
+    lowest_z = std::min(lowest_z, lowest.z());
+  });
+  EXPECT_GE(lowest_z, -1e-8);
+  EXPECT_LE(lowest_z, 1e-6);  // it stays in contact
+}
+
+// A torque-free tumbling ellipsoid near its unstable intermediate axis: the variational rotation row conserves the
+// angular momentum and (Moser-Veselov) the kinetic energy to round-off; the paper's step loses 7 % at h = 0.01.
+TEST(RattleEnergy, TumblingEllipsoidConservesEnergyAndMomentum) {
+  Model m;
+  m.gravity_W = Vec3::Zero();
+  m.bodies.push_back(test_models::MovingBody("egg", MakeEllipsoid(Vec3(0.3, 0.2, 0.1)), 1.0, Pose::Identity()));
+  m.bodies.back().w_WB0 = Vec3(0.1, 3.0, 0.2);
+  const Model model = test_models::Finish(m);
+  const Mat3 I_B = model.bodies[0].I_B;
+  auto momentum = [&](const State& s) {
+    const Mat3 R = s.X_WB(model, 0).linear();
+    return Vec3(R * I_B * R.transpose() * s.w_WB(0));
+  };
   for (double h : {0.01, 0.001}) {
-    const RockingRun r = Rock(RattleOptions(h), 10.0);
-    printf("h=%g drift=%.3g ptp=%.3g pen=%.3g nc=%d\n", h, r.drift, r.peak_to_peak, r.max_penetration, r.nonconverged);
+    const State initial = State::Initial(model);
+    const double E0 = KineticEnergy(model, initial);
+    const Vec3 L0 = momentum(initial);
+    double dE = 0.0, dL = 0.0, w_y_min = 10.0;
+    RunScene(model, RattleOptions(h), 10.0, [&](const Model& mm, const State& s, const Data&, const StepReport& r) {
+      ASSERT_TRUE(r.converged);
+      dE = std::max(dE, std::abs(KineticEnergy(mm, s) / E0 - 1.0));
+      dL = std::max(dL, (momentum(s) - L0).norm() / L0.norm());
+      w_y_min = std::min(w_y_min, s.X_WB(mm, 0).linear().col(1).dot(s.w_WB(0)));
+    });
+    std::printf("[ rattle ] tumbling ellipsoid h = %g: |dE/E| %.2g, |dL|/|L| %.2g\n", h, dE, dL);
+    EXPECT_LE(dE, 1e-12) << "h = " << h;
+    EXPECT_LE(dL, 1e-12) << "h = " << h;
+    EXPECT_LT(w_y_min, 0.0) << "h = " << h;  // it flips about the intermediate axis (the motion is not trivial)
+  }
+}
+
+// The order of the step on the rocking ellipsoid over 2 s: the end state's error against a run at h / 32 halves by
+// 4 when h halves. (The paper's step is first order, but at these steps it damps the rocking away within the 2 s, so
+// its errors are not yet in the asymptotic range.)
+double RockingError(const StepperOptions& options, const State& reference) {
+  const State end = Rock(options, 2.0).end;
+  return (end.q - reference.q).norm() + 0.1 * (end.v - reference.v).norm();
+}
+
+TEST(RattleEnergy, SecondOrderOnTheRockingEllipsoid) {
+  const double h = 0.004;
+  const State reference = Rock(RattleOptions(h / 32), 2.0).end;
+  const double e1 = RockingError(RattleOptions(h), reference), e2 = RockingError(RattleOptions(h / 2), reference);
+  const double order = std::log2(e1 / e2);
+  std::printf("[ rattle ] order on the rocking ellipsoid: %.3f (errors %.3g, %.3g)\n", order, e1, e2);
+  EXPECT_NEAR(order, 2.0, 0.1);
+}
+
+// Dropped 5 cm: the landing dissipates (restitution 0), and energy never rises above its start; no penetration.
+TEST(RattleEnergy, DroppedEllipsoidNeverGainsEnergyAndNeverPenetrates) {
+  for (double h : {0.01, 0.001}) {
+    const Model model = RockingEllipsoid(0.05);
+    const double E0 = Energy(model, State::Initial(model));
+    double max_gain = -1.0, lowest_z = 1.0;
+    const auto stats = RunScene(model, RattleOptions(h), 3.0,
+                                [&](const Model& m, const State& s, const Data&, const StepReport&) {
+      max_gain = std::max(max_gain, Energy(m, s) - E0);
+      Vec3 lowest;
+      SupportPoint(m.bodies[1].shape, s.X_WB(m, 1), -Vec3::UnitZ(), &lowest);
+      lowest_z = std::min(lowest_z, lowest.z());
+    });
+    std::printf("[ rattle ] dropped ellipsoid h = %g: largest energy gain %.3g J, lowest point %.3g m\n", h, max_gain,
+                lowest_z);
+    EXPECT_EQ(stats.nonconverged, 0);
+    EXPECT_LE(max_gain, 1e-9) << "h = " << h;
+    EXPECT_GE(lowest_z, -1e-8) << "h = " << h;
+    EXPECT_LE(stats.max_solver_penetration, 1e-8);
   }
 }
 

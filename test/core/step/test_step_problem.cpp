@@ -10,6 +10,8 @@
 
 #include "implicit_sim/core/ncp/condensed_lu.h"
 
+#include "ncp/test_ncp_problems.h"
+
 #include "test_models.h"
 
 namespace implicit_sim {
@@ -34,15 +36,39 @@ Eigen::VectorXd BeginAtRandomPoint(const Model& model, unsigned seed, const Eige
 // Compares J with central differences of Phi column by column; reports the worst block by name. In sparse mode the
 // Jacobian comes from the sparse assembly (second evaluation: the recorded pattern replayed) with the friction rows
 // of the sparse solver (set_regular_separated_friction), and the dense Jacobian must equal it entry for entry.
+// With a RATTLE stage (step_rattle.cpp): stage 1 with start frames from another random point for every other pair (the
+// rest on the end frame); stage 2 after BeginVelocityStage from the random point, at a point near its initial guess.
 void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, bool sparse = false,
-                                            bool projected = false, double proximal_weight = 0.0) {
+                                            bool projected = false, double proximal_weight = 0.0,
+                                            StepStage stage = StepStage::kWhole) {
   NcpEvalMode mode;
   mode.project_multipliers = projected;
   Eigen::VectorXd center;
   StepProblem problem(model);
   problem.set_regular_separated_friction(sparse);
   const Eigen::VectorXd wrench = Eigen::VectorXd::Constant(model.nv(), 0.3);
-  const Eigen::VectorXd z = BeginAtRandomPoint(model, seed, &wrench, &problem);
+  Eigen::VectorXd z = BeginAtRandomPoint(model, seed, &wrench, &problem);
+  if (stage != StepStage::kWhole) {
+    problem.set_stage(StepStage::kPosition);
+    std::mt19937 rng(seed + 100);
+    Eigen::VectorXd frame = z + 0.1 * ncp_test::RandomVector(z.size(), &rng);
+    std::vector<char> known(problem.blocks().size());
+    for (size_t c = 0; c < known.size(); ++c) {
+      known[c] = c % 2 == 0;
+      frame.segment<3>(problem.blocks()[c].offset + pair_index::kN).normalize();
+    }
+    problem.SetStartFrames(frame, known);
+  }
+  if (stage == StepStage::kVelocity) {
+    Eigen::VectorXd z2;
+    for (size_t c = 0; c < problem.blocks().size(); ++c) {  // every other pair closed (touching), the rest open
+      z[problem.blocks()[c].offset + pair_index::kD] = c % 2 == 0 ? 0.0 : 0.05;
+      z[problem.blocks()[c].ln()] = c % 2 == 0 ? 0.7 : 0.0;
+    }
+    problem.BeginVelocityStage(z, &z2);
+    std::mt19937 rng(seed + 200);
+    z = z2 + 0.2 * ncp_test::RandomVector(z.size(), &rng);
+  }
   if (proximal_weight > 0.0) {  // a centre away from z
     center = z + Eigen::VectorXd::Constant(z.size(), 0.2);
     mode.proximal_weight = proximal_weight;
@@ -82,6 +108,31 @@ void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, b
   }
   EXPECT_LT(worst, 2e-6) << "worst mismatch at row " << worst_row << ", column " << worst_col
                          << " (body velocities first, then joint blocks, then pair blocks: a1 a2 n d s_t s_o s_r alpha beta ln sigma)";
+}
+
+// The RATTLE stages of every model above, dense and sparse.
+TEST(StepProblemJacobian, RattlePositionStage) {
+  for (const bool sparse : {false, true}) {
+    ExpectJacobianMatchesFiniteDifferences(test_models::EllipsoidOnGround(), 21, sparse, false, 0.0, StepStage::kPosition);
+    ExpectJacobianMatchesFiniteDifferences(test_models::SphereOnTwoSpheres(), 22, sparse, false, 0.0,
+                                           StepStage::kPosition);
+    ExpectJacobianMatchesFiniteDifferences(test_models::BoxAndSuperellipsoid(), 23, sparse, false, 0.0,
+                                           StepStage::kPosition);
+    ExpectJacobianMatchesFiniteDifferences(test_models::PrismOnGround(7), 24, sparse, false, 0.0, StepStage::kPosition);
+    ExpectJacobianMatchesFiniteDifferences(test_models::JointedRobot(), 25, sparse, false, 0.0, StepStage::kPosition);
+  }
+}
+
+TEST(StepProblemJacobian, RattleVelocityStage) {
+  for (const bool sparse : {false, true}) {
+    ExpectJacobianMatchesFiniteDifferences(test_models::EllipsoidOnGround(), 31, sparse, false, 0.0, StepStage::kVelocity);
+    ExpectJacobianMatchesFiniteDifferences(test_models::SphereOnTwoSpheres(), 32, sparse, false, 0.0,
+                                           StepStage::kVelocity);
+    ExpectJacobianMatchesFiniteDifferences(test_models::BoxAndSuperellipsoid(), 33, sparse, true, 0.0,
+                                           StepStage::kVelocity);
+    ExpectJacobianMatchesFiniteDifferences(test_models::PrismOnGround(7), 34, sparse, false, 0.0, StepStage::kVelocity);
+    ExpectJacobianMatchesFiniteDifferences(test_models::JointedRobot(), 35, sparse, false, 0.0, StepStage::kVelocity);
+  }
 }
 
 TEST(StepProblemJacobian, EllipsoidOnGround) {

@@ -315,6 +315,7 @@ class StepProblem final : public NcpProblem {
   // Stage 2 per block: the stage-1 solution's block (the frozen closest points, ln, s, sigma), its force on body 1
   // and torsion vector, and whether the pair is closed at the end of stage 1.
   Eigen::VectorXd stage1_z_;
+  Eigen::VectorXd stage1_rows_;  // stage 1's residual at its solution (it corrects the momenta of stage 2)
   std::vector<Vec3> stage1_force_, stage1_torsion_;
   std::vector<char> closed_;
   std::vector<char> velocity_kind_;  // complementarity_kind_ of stage 2 (closed pairs and limits only)
