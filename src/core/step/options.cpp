@@ -21,7 +21,7 @@ using Options = StepperOptions;
 constexpr std::array<OptionRow, kNumOptionRows> kTable{{
     {"h", "time_step", "--dt", OptionKind::kReal, 0.01, 0.0, 1.0, true, false, "s", nullptr, "time step",
      [](const Options& o) { return o.h; }, [](Options* o, double x) { o->h = x; }},
-    {"scheme", "scheme", "--scheme", OptionKind::kChoice, 0.0, 0.0, 1.0, false, false, "", kSchemeNames,
+    {"scheme", "scheme", "--scheme", OptionKind::kChoice, 1.0, 0.0, 1.0, false, false, "", kSchemeNames,
      "the time-stepping scheme: the paper's first-order step, or the second-order two-stage RATTLE step",
      [](const Options& o) { return static_cast<double>(static_cast<int>(o.scheme)); },
      [](Options* o, double x) { o->scheme = x == 1.0 ? Options::Scheme::kRattle : Options::Scheme::kPaper; }},

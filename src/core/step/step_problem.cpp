@@ -320,10 +320,10 @@ void StepProblem::AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) co
       // RATTLE stage 1: m (v_half - v0) = h/2 f + impulses, and the Lie-group variational (Moser-Veselov) rotation
       // row L_disc(w_half) = L0 + h/2 tau + impulse moments (doc/method.md, "The second-order step").
       Phi->segment<3>(row) = (body.mass * (z.segment<3>(row) - s.v0) / h_ - 0.5 * f_ext) / Fs;
-      Mat3 dL_dtheta;
-      const Vec3 L_half = DiscreteMomentum(body.I_B, s.R0, e.R, h_, &dL_dtheta);
+      Mat3 dL_dtheta, dL_dw;
+      const Vec3 L_half = DiscreteMomentum(body.I_B, s.R0, e.R, e.w, h_, &dL_dtheta, &dL_dw);
       Phi->segment<3>(row + 3) = ((L_half - s.I_W0 * s.w0) / h_ - 0.5 * tau_ext) / Fs;
-      AddJ(row + 3, row + 3, Mat3(dL_dtheta * e.dtheta_dw / (h_ * Fs)));
+      AddJ(row + 3, row + 3, Mat3((dL_dtheta * e.dtheta_dw + dL_dw) / (h_ * Fs)));
       continue;
     }
     Phi->segment<3>(row) = (body.mass * (z.segment<3>(row) - s.v0) / h_ - f_ext) / Fs;

@@ -19,7 +19,7 @@ struct StepperOptions {
   // smooth motion.
   enum class Scheme { kPaper, kRattle };
   double h = 0.01;                // time step (s), in (0, 1]
-  Scheme scheme = Scheme::kPaper;
+  Scheme scheme = Scheme::kRattle;
   Solver solver = Solver::kNewton;  // the primary solver; Newton's retry ladder also tries Ipopt
   NewtonOptions newton;
   int ipopt_max_iterations = 500; // [1, 100000]

@@ -212,9 +212,11 @@ class StepProblem final : public NcpProblem {
   };
 
   void UpdateBodies(const Eigen::VectorXd& z) const;
-  // Stage 1's rotation row: the discrete angular momentum (1/h) R0 vee(F Jd - Jd F^T), F = R0^T R1, of a body with
-  // body inertia I_B, and its derivative with respect to the end-of-step rotation increment theta (R1 -> Exp(theta) R1).
-  static Vec3 DiscreteMomentum(const Mat3& I_B, const Mat3& R0, const Mat3& R1, double h, Mat3* dL_dtheta);
+  // Stage 1's rotation row: the discrete angular momentum (1/h) R0 vee(F Jd - Jd F^T) / sinc(h |w|), F = R0^T R1 =
+  // Exp(h R0^T w), of a body with body inertia I_B (step_rattle.cpp), and its derivatives with respect to the
+  // end-of-step rotation increment theta (R1 -> Exp(theta) R1) at fixed w and to w at fixed R1 (either may be null).
+  static Vec3 DiscreteMomentum(const Mat3& I_B, const Mat3& R0, const Mat3& R1, const Vec3& w, double h,
+                               Mat3* dL_dtheta, Mat3* dL_dw);
   void AddBodyRowsVelocityStage(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const;
   void AddPairVelocityStage(int c, const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const;
   void AddJointRowsVelocityStage(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) const;
