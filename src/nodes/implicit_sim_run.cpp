@@ -21,7 +21,8 @@
 namespace {
 
 constexpr const char* kUsage =
-    "usage: implicit_sim_run --scene FILE --duration T --dt H --out DIR [--tolerance TOL] [--max-iterations N] "
+    "usage: implicit_sim_run --scene FILE --duration T --dt H --out DIR [--scheme paper|rattle] [--tolerance TOL] "
+    "[--max-iterations N] "
     "[--solver newton|ipopt] [--threads N] [--stop-at-rest E:S] [--check-penetration]";
 
 struct Args {
@@ -154,6 +155,7 @@ int main(int argc, char** argv) {
     RunSummary summary;
     summary.scene = model.scene_name;
     summary.h = options.h;
+    summary.scheme = options.scheme == StepperOptions::Scheme::kRattle ? "rattle" : "paper";
     summary.kinetic_energy_initial = KineticEnergy(model, state);
     for (int pair = 0; !data.broad_phase && pair < static_cast<int>(model.pairs.size()); ++pair) {
       summary.pairs.emplace_back(model.PairName(pair), model.pairs[pair].friction);

@@ -15,6 +15,7 @@ void RunSummary::Add(const StepReport& report, const Data& data) {
   wall_s += report.wall_time_s;
   if (!report.converged) ++nonconverged_steps;
   cold_restarts += report.cold_restarts;
+  end_frame_retries += report.end_frame_retries;
   substeps += report.substeps;
   crossings += report.crossings;
   proximal_solves += report.proximal_solves;
@@ -34,6 +35,7 @@ std::string RunSummary::ToJson() const {
   std::string json = "{\n";
   json += "  \"scene\": \"" + scene + "\",\n";
   json += "  \"h\": " + FormatNumber(h) + ",\n";
+  json += "  \"scheme\": \"" + scheme + "\",\n";
   json += "  \"steps\": " + std::to_string(steps) + ",\n";
   json += "  \"wall_s\": " + FormatNumber(wall_s) + ",\n";
   json += "  \"us_per_step\": " + FormatNumber(us_per_step) + ",\n";
@@ -42,6 +44,7 @@ std::string RunSummary::ToJson() const {
   json += "  \"max_joint_angle_error\": " + FormatNumber(max_joint_angle_error) + ",\n";
   json += "  \"nonconverged_steps\": " + std::to_string(nonconverged_steps) + ",\n";
   json += "  \"cold_restarts\": " + std::to_string(cold_restarts) + ",\n";
+  json += "  \"end_frame_retries\": " + std::to_string(end_frame_retries) + ",\n";
   json += "  \"proximal_solves\": " + std::to_string(proximal_solves) + ",\n";
   json += "  \"smoothed_solves\": " + std::to_string(smoothed_solves) + ",\n";
   json += "  \"ipopt_solves\": " + std::to_string(ipopt_solves) + ",\n";
@@ -112,7 +115,7 @@ void TrajectoryWriter::WriteJoints(const State& state, const Data* data) {
   for (int j = 0; j < static_cast<int>(model_.joints.size()); ++j) {
     if (!model_.joints[j].has_coordinate()) continue;
     out_ << ',' << FormatNumber(JointPosition(model_, state, j)) << ',' << FormatNumber(JointVelocity(model_, state, j))
-         << ',' << FormatNumber(data ? data->problem.JointLimitEffort(data->z, j) : std::nan(""));
+         << ',' << FormatNumber(data ? data->joint_limit_effort[j] : std::nan(""));
   }
 }
 

@@ -136,8 +136,10 @@ void ReadRecorded(CaseReader* in, RecordedOutcome* recorded) {
   recorded->fault = in->Value("recorded_fault", "<fault name>");
 }
 
-// "options <count>", then "<field> <value>" lines in any order; options not listed keep their defaults.
+// "options <count>", then "<field> <value>" lines in any order; options not listed keep their defaults, but for the
+// scheme: a case that does not name one was captured before the option existed, from the paper's step.
 void ReadOptions(CaseReader* in, StepperOptions* options) {
+  options->scheme = StepperOptions::Scheme::kPaper;
   const int count = in->Count("options");
   std::set<std::string> seen;
   for (int i = 0; i < count; ++i) {

@@ -22,7 +22,8 @@ Data::Data(const Model& model, PairSelection selection)
       broad(MakeBroadPhase(model)),
       X_WB(model.bodies.size(), Pose::Identity()),
       inflation(model.bodies.size(), 0.0),
-      contacts(problem.blocks().size()) {
+      contacts(problem.blocks().size()),
+      joint_limit_effort(model.joints.size(), 0.0) {
   for (size_t c = 0; c < contacts.size(); ++c) contacts[c].pair = problem.blocks()[c].pair;
   problem.set_regular_separated_friction(true);
 }

@@ -41,6 +41,7 @@ void SizeWorkspace(IslandSolve* island) {
   island->ncp_error_rows.setZero(n);
   for (Eigen::VectorXd& backup : island->z_backup) backup.setZero(n);
   island->contacts.resize(island->pairs.size());
+  island->joint_limit_effort.assign(island->joints.size(), 0.0);
   island->axes_warm_failed.reserve(island->pairs.size());
 }
 
@@ -122,9 +123,11 @@ void ScatterIsland(const IslandSolve& island, Data* data) {
   for (size_t i = 0; i < island.slots.size(); ++i) {
     data->z.segment<6>(Model::v_offset(island.slots[i])) = island.z.segment<6>(6 * i);
   }
-  for (int j : island.joints) {
+  for (size_t i = 0; i < island.joints.size(); ++i) {
+    const int j = island.joints[i];
     const int size = global.joint_size(j);
     data->z.segment(global.joint_offset(j), size) = island.z.segment(local.joint_offset(j), size);
+    data->joint_limit_effort[j] = island.joint_limit_effort[i];
   }
   for (size_t c = 0; c < island.blocks.size(); ++c) {
     const PairBlock& from = local.blocks()[c];

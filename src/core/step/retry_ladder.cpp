@@ -124,6 +124,13 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
   }
   NcpSummary warm = SolveFromStart(options, island, report);
   if (warm.converged) return warm;
+  // Rung 1a (RATTLE stage 1): the warm start again with every pair on its end-of-step frame; a start frame on the
+  // wrong feature (a polygon that tips onto its next face within the step) can leave stage 1 without a solution.
+  if (problem.FallBackToEndFrames() > 0) {
+    report->end_frame_retries++;
+    warm = SolveFromStart(options, island, report);
+    if (warm.converged) return warm;
+  }
   island->z_best = island->z;  // the failed warm attempt (or the projected one, if better)
   // Every rung from here on projects the multipliers (with projected_retries): they start where the plain rows failed.
   StepperOptions later_options = options;

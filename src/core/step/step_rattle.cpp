@@ -80,9 +80,16 @@ Vec3 StepProblem::DiscreteMomentum(const Mat3& I_B, const Mat3& R0, const Mat3& 
   return L_plain / g;
 }
 
+// Only a pair closed at the start has a start frame worth acting along: for an impact (a pair apart at the start,
+// closed at the end) the start-of-step closest points say nothing about where the bodies meet, so the impulse takes
+// the end frame, as in the paper's step.
 void StepProblem::SetStartFrames(const Eigen::VectorXd& z_start, const std::vector<char>& known) {
   frame_z_ = z_start;
-  for (size_t c = 0; c < blocks_.size(); ++c) use_start_frame_[c] = known[c];
+  for (size_t c = 0; c < blocks_.size(); ++c) {
+    const PairBlock& blk = blocks_[c];
+    const bool closed = z_start[blk.offset + pi::kD] <= kClosedGap || z_start[blk.ln()] > 1e-12 * force_scale_;
+    use_start_frame_[c] = known[c] && closed;
+  }
 }
 
 int StepProblem::FallBackWhereActiveSetsChanged(const Eigen::VectorXd& z) {
@@ -97,6 +104,15 @@ int StepProblem::FallBackWhereActiveSetsChanged(const Eigen::VectorXd& z) {
     }
     use_start_frame_[c] = 0;
     ++count;
+  }
+  return count;
+}
+
+int StepProblem::FallBackToEndFrames() {
+  int count = 0;
+  for (char& use : use_start_frame_) {
+    count += use;
+    use = 0;
   }
   return count;
 }

@@ -217,7 +217,10 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
     report->crossings++;
     result.converged = false;
   }
-  if (rattle && island->z.allFinite()) result.converged = FinishRattleStep(options, result.converged, island, report);
+  // Stage 2 after a converged stage 1, or after the best stage 1 of the shortest sub-step (which is then accepted).
+  if (rattle && island->z.allFinite() && (result.converged || last_chance)) {
+    result.converged = FinishRattleStep(options, result.converged, island, report);
+  }
   const Eigen::VectorXd& z_velocity = rattle ? island->z_velocity : island->z;
   if (!result.converged && depth < Data::kMaxSubstepDepth) {
     island->z = backup;
@@ -249,6 +252,9 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
     report->complementarity_error = std::max(report->complementarity_error, velocity_error.complementarity);
   }
   problem.Contacts(z_velocity, &island->contacts);
+  for (size_t i = 0; i < island->joints.size(); ++i) {
+    island->joint_limit_effort[i] = problem.JointLimitEffort(z_velocity, island->joints[i]);
+  }
   problem.set_stage(rattle ? StepStage::kPosition : StepStage::kWhole);
   WriteState(model, problem, island->z, z_velocity, state);
   island->has_warm_start = true;
@@ -269,6 +275,7 @@ void StepIsland(void* context, int index) {
 void MergeReport(const StepReport& island, StepReport* step) {
   step->converged = step->converged && island.converged;
   step->projected_solves += island.projected_solves;
+  step->end_frame_retries += island.end_frame_retries;
   step->cold_restarts += island.cold_restarts;
   step->proximal_solves += island.proximal_solves;
   step->smoothed_solves += island.smoothed_solves;

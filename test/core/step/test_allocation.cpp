@@ -56,11 +56,13 @@ TEST(Allocation, AThousandWarmStepsAllocateNothing) {
     scenes.emplace_back(scene, LoadSceneFromFile(testing_support::ScenePath(scene)));
   }
   scenes.emplace_back("stack of three boxes", BoxStack());
+  for (const auto scheme : {StepperOptions::Scheme::kPaper, StepperOptions::Scheme::kRattle})
   for (const auto& [name, model] : scenes) {
-    SCOPED_TRACE(name);
+    SCOPED_TRACE(name + (scheme == StepperOptions::Scheme::kRattle ? ", rattle" : ", paper"));
     Data data(model);
     State state = State::Initial(model);
-    const StepperOptions options;
+    StepperOptions options;
+    options.scheme = scheme;
     Step(model, options, &state, &data);  // the first step starts cold (distance oracle)
     // A push on the top body that changes every step, so that every step iterates.
     Eigen::VectorXd wrench = Eigen::VectorXd::Zero(model.nv());

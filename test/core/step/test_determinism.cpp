@@ -2,6 +2,8 @@
 // give bit-identical trajectories (a hash of every step's state and contact forces).
 #include <cstdint>
 #include <cstring>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -23,21 +25,29 @@ std::vector<uint64_t> RunHashed(const Model& model, const StepperOptions& option
 }
 
 struct Case {
-  const char* name;
+  std::string name;
   Model model;
   double h;
+  StepperOptions::Scheme scheme;
   StepperOptions options() const {
     StepperOptions o;
     o.h = h;
+    o.scheme = scheme;
     return o;
   }
 };
 
+// Both schemes: the RATTLE step's warm start (stage 1's solution, its start frames) must carry as much as the paper's.
 std::vector<Case> Cases() {
-  return {{"P3 (dense, every pair)", LoadSceneFromFile(testing_support::ScenePath("p3_sphere_on_two_spheres.urdf")),
-           0.001},
-          {"10-sphere pile (broad phase, sparse LU)", LoadSceneFromString(MakePileUrdf(10, PileShape::kSphere), "pile"),
-           0.005}};
+  std::vector<Case> cases;
+  for (const auto& [scheme, name] : {std::make_pair(StepperOptions::Scheme::kPaper, "paper"),
+                                     std::make_pair(StepperOptions::Scheme::kRattle, "rattle")}) {
+    cases.push_back({std::string("P3 (dense, every pair), ") + name,
+                     LoadSceneFromFile(testing_support::ScenePath("p3_sphere_on_two_spheres.urdf")), 0.001, scheme});
+    cases.push_back({std::string("10-sphere pile (broad phase, sparse LU), ") + name,
+                     LoadSceneFromString(MakePileUrdf(10, PileShape::kSphere), "pile"), 0.005, scheme});
+  }
+  return cases;
 }
 
 TEST(Determinism, TheSameRunTwiceIsBitIdenticalOver10000Steps) {

@@ -17,16 +17,22 @@ struct Warm {
   Warm() { EXPECT_TRUE(Step(model, StepperOptions(), &state, &data).converged); }  // a good warm start first
 };
 
-TEST(FailureLadder, WhenEveryRungFailsEachIsCountedAndTheBestFiniteIterateIsKept) {
+// Both schemes; the RATTLE step's velocity stage runs (and fails: projected Newton, then a continuation) only in the
+// 16 shortest sub-steps, whose best iterates are accepted.
+class FailureLadderBothSchemes : public ::testing::TestWithParam<StepperOptions::Scheme> {};
+
+TEST_P(FailureLadderBothSchemes, WhenEveryRungFailsEachIsCountedAndTheBestFiniteIterateIsKept) {
   Warm w;
   StepperOptions options;
+  options.scheme = GetParam();
   options.newton.max_iterations = 1;
   options.newton.tolerance = 1e-300;  // below what double precision can reach
   options.proximal_weight = 1.0;
   const StepReport report = Step(w.model, options, &w.state, &w.data);
+  const int velocity_stages = GetParam() == StepperOptions::Scheme::kRattle ? 16 : 0;
   EXPECT_EQ(report.cold_restarts, 1 + 2 + 4 + 8 + 16);    // every (sub-)step: warm fails, cold fails,
   EXPECT_EQ(report.proximal_solves, 1 + 2 + 4 + 8 + 16);  // the proximal rung fails,
-  EXPECT_EQ(report.smoothed_solves, 1 + 2 + 4 + 8 + 16);  // the continuation fails,
+  EXPECT_EQ(report.smoothed_solves, 1 + 2 + 4 + 8 + 16 + velocity_stages);  // the continuation fails,
   EXPECT_EQ(report.ipopt_solves, 1 + 2 + 4 + 8 + 16);     // Ipopt and its polish fail,
   EXPECT_EQ(report.substeps, 1 + 2 + 4 + 8);              // and it splits down to h / 16
   EXPECT_FALSE(report.converged);
@@ -38,6 +44,9 @@ TEST(FailureLadder, WhenEveryRungFailsEachIsCountedAndTheBestFiniteIterateIsKept
   EXPECT_EQ(report.fault, StepFault::kNotConverged);
   EXPECT_TRUE(Step(w.model, StepperOptions(), &w.state, &w.data).converged);  // normal settings recover
 }
+
+INSTANTIATE_TEST_SUITE_P(Schemes, FailureLadderBothSchemes,
+                         ::testing::Values(StepperOptions::Scheme::kPaper, StepperOptions::Scheme::kRattle));
 
 TEST(FailureLadder, AnIterationLimitOfOneIsRescuedByTheLadder) {
   for (const double proximal_weight : {0.0, 1.0}) {

@@ -174,7 +174,7 @@ TEST(Joints, RevoluteLimitStopsTheBarWithoutOvershootAndHoldsItAgainstGravity) {
     const double q = JointPosition(m, s, 0);
     highest = std::max(highest, q);
     lowest = std::min(lowest, q);
-    limit_effort = d.problem.JointLimitEffort(d.z, 0);
+    limit_effort = d.joint_limit_effort[0];
     steps_at_limit += q > joint.upper - 1e-9;
   });
   const double expected = -1.0 * 9.81 * 0.3 * std::sin(0.3);  // the bar's weight about the hinge at -0.3 rad

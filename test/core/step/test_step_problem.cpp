@@ -56,8 +56,10 @@ void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, b
     for (size_t c = 0; c < known.size(); ++c) {
       known[c] = c % 2 == 0;
       frame.segment<3>(problem.blocks()[c].offset + pair_index::kN).normalize();
+      frame[problem.blocks()[c].offset + pair_index::kD] = 0.0;  // touching at the start
     }
     problem.SetStartFrames(frame, known);
+    for (size_t c = 0; c < known.size(); ++c) EXPECT_EQ(problem.uses_start_frame(static_cast<int>(c)), c % 2 == 0);
   }
   if (stage == StepStage::kVelocity) {
     Eigen::VectorXd z2;

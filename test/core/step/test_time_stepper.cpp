@@ -29,20 +29,27 @@ Model SphereAboveGround(double height) {
 
 TEST(TimeStepper, SeparatedContactIsExactFreeFall) {
   // Normal force 0 leaves the paper's friction rows degenerate (doc/method.md, pitfall 2); the step must still converge
-  // and reproduce implicit Euler free fall exactly: v_k = -g h k, z_k = z0 - g h^2 k (k + 1) / 2.
+  // and reproduce free fall exactly: v_k = -g h k and, with the paper's step (implicit Euler), z_k = z0 - g h^2 k (k + 1)
+  // / 2; with the RATTLE step (velocity Verlet), z_k = z0 - g (h k)^2 / 2, the exact parabola.
   const Model model = SphereAboveGround(2.0);
   const double h = 0.01, g = 9.81;
+  for (const auto scheme : {StepperOptions::Scheme::kPaper, StepperOptions::Scheme::kRattle}) {
+  StepperOptions options;
+  options.h = h;
+  options.scheme = scheme;
+  const double verlet = scheme == StepperOptions::Scheme::kRattle ? 1.0 : 0.0;
   int k = 0;
-  testing_support::RunScene(model, h, 0.4, [&](const Model&, const State& s, const Data& d, const StepReport& r) {
+  testing_support::RunScene(model, options, 0.4, [&](const Model&, const State& s, const Data& d, const StepReport& r) {
     ++k;
     EXPECT_TRUE(r.converged) << "step " << k;
     EXPECT_NEAR(s.v[2], -g * h * k, 1e-11);
-    EXPECT_NEAR(s.q[2], 2.0 - g * h * h * k * (k + 1) / 2.0, 1e-11);
+    EXPECT_NEAR(s.q[2], 2.0 - g * h * h * k * (k + 1 - verlet) / 2.0, 1e-11);
     EXPECT_EQ(d.contacts[0].normal_force, d.contacts[0].normal_force);  // not NaN
     EXPECT_NEAR(d.contacts[0].normal_force, 0.0, 1e-9);
     EXPECT_NEAR(d.contacts[0].gap, s.q[2] - 0.1, 1e-9);  // closed-form distance to the ground
   });
   EXPECT_EQ(k, 40);
+  }
 }
 
 // A tilted cylinder whose lowest point is on its rim (side and cap both active): the cold start must give both
@@ -243,8 +250,9 @@ namespace implicit_sim {
 namespace {
 
 TEST(TimeStepper, TumblingEllipsoidConservesAngularMomentumAndNeverGainsEnergy) {
-  // Torque-free, spinning near the unstable intermediate axis: the angular row in momentum form keeps L exactly;
-  // like the rest of the scheme it is first order and dissipates a little energy, never adds any.
+  // The paper's step (the RATTLE step conserves the energy too: test_rattle_energy.cpp). Torque-free, spinning near
+  // the unstable intermediate axis: the angular row in momentum form keeps L exactly; like the rest of the scheme it
+  // is first order and dissipates a little energy, never adds any.
   Model m;
   m.gravity_W = Vec3::Zero();
   m.bodies.push_back(test_models::MovingBody("egg", MakeEllipsoid(Vec3(0.3, 0.2, 0.1)), 1.0, Pose::Identity()));
@@ -259,7 +267,10 @@ TEST(TimeStepper, TumblingEllipsoidConservesAngularMomentumAndNeverGainsEnergy) 
   const double E0 = KineticEnergy(model, initial);
   const Vec3 L0 = momentum(initial);
   double max_L_error = 0.0, max_gain = 0.0, final_loss = 0.0;
-  testing_support::RunScene(model, 0.001, 10.0, [&](const Model& mm, const State& s, const Data&, const StepReport& r) {
+  StepperOptions paper;
+  paper.h = 0.001;
+  paper.scheme = StepperOptions::Scheme::kPaper;
+  testing_support::RunScene(model, paper, 10.0, [&](const Model& mm, const State& s, const Data&, const StepReport& r) {
     ASSERT_TRUE(r.converged);
     max_L_error = std::max(max_L_error, (momentum(s) - L0).norm() / L0.norm());
     const double E = KineticEnergy(mm, s);
@@ -277,7 +288,8 @@ TEST(TimeStepper, TumblingEllipsoidConservesAngularMomentumAndNeverGainsEnergy) 
 namespace implicit_sim {
 namespace {
 
-TEST(TimeStepper, RockingEllipsoidLosesEnergyLikeBackwardEulerAndNeverGainsAny) {
+TEST(TimeStepper, ThePapersStepRocksAnEllipsoidDownLikeBackwardEulerAndNeverGainsEnergy) {
+  // The paper's first-order step (the RATTLE step keeps the energy: test_rattle_energy.cpp).
   // An ellipsoid (0.2, 0.1, 0.06 m) tilted 0.2 rad about y rocks on the ground with angular frequency w of about
   // 21 rad/s. Taking the geometry at the end of the step acts like backward Euler: about (h w)^2 of the rocking
   // energy goes per step (doc/method.md, pitfall 7), so after 10 s at h = 1 ms about exp(-4.4) ~ 1 % is left.
@@ -294,7 +306,10 @@ TEST(TimeStepper, RockingEllipsoidLosesEnergyLikeBackwardEulerAndNeverGainsAny) 
   const double rest = 9.81 * 0.06, E0 = energy(State::Initial(model));
   double max_gain = 0.0, previous_wy = 0.0, kept = 0.0;
   int half_periods = 0;
-  const auto stats = testing_support::RunScene(model, 0.001, 10.0,
+  StepperOptions paper;
+  paper.h = 0.001;
+  paper.scheme = StepperOptions::Scheme::kPaper;
+  const auto stats = testing_support::RunScene(model, paper, 10.0,
                                                [&](const Model&, const State& s, const Data&, const StepReport&) {
     max_gain = std::max(max_gain, energy(s) - E0);
     if (s.v[4] * previous_wy < 0.0) ++half_periods;

@@ -23,11 +23,13 @@ namespace implicit_sim {
 struct RunSummary {
   std::string scene;
   double h = 0.0;
+  std::string scheme;                  // "paper" or "rattle" (StepperOptions::scheme)
   int steps = 0;
   double wall_s = 0.0;                 // time spent in Step (s)
   double max_penetration = 0.0;        // max over steps and pairs of max(0, -gap) (m)
   int nonconverged_steps = 0;
   int cold_restarts = 0;
+  int end_frame_retries = 0;           // RATTLE stage-1 retries on the end-of-step frames
   int proximal_solves = 0;             // solves that reached the proximal-point rung
   int smoothed_solves = 0;             // solves that reached the smoothing continuation
   int ipopt_solves = 0;                // Ipopt solves (primary solver or ladder rung)

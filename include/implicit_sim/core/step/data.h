@@ -70,6 +70,7 @@ struct IslandSolve {
   StepReport report;
   bool advanced = false;
   std::vector<ContactResult> contacts;  // one per pair, in the order of `pairs`
+  std::vector<double> joint_limit_effort;  // one per joint, in the order of `joints` (see Data::joint_limit_effort)
 };
 
 class Data {
@@ -118,6 +119,10 @@ class Data {
   // --- outputs: the contact results of the last step, one per pair in its NCP (contacts[i].pair is the model
   // pair). With every pair in the NCP, contacts[c] belongs to model pair c. ---
   std::vector<ContactResult> contacts;
+  // The step-average effort each joint's limits exerted in the last step (N m or N, positive towards increasing
+  // position; 0 for a joint without limits or not yet stepped), one per model joint (StepProblem::JointLimitEffort of
+  // the step's solution: with the RATTLE scheme, its total over both stages).
+  std::vector<double> joint_limit_effort;
 };
 
 // Everything a step reads besides the State: whether there is a warm start, the previous solution z (velocities,

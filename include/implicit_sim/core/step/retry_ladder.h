@@ -1,5 +1,7 @@
 // The retry ladder of one step solve: what the stepper tries, in order, until the step NCP is solved.
 //   1. warm start: the previous step's solution carried over the step (seeding.h), by the primary solver;
+//   1a. (RATTLE stage 1) the same start with every pair on its end-of-step frame instead of its start frame
+//       (StepReport::end_frame_retries);
 //   1b. the same start by Newton with projected multipliers (ncp_problem.h; with StepperOptions::projected_retries,
 //       the default, this rung and every later Newton solve project);
 //   2. cold start: fresh closest points, normals and friction seeds;

@@ -119,13 +119,16 @@ class StepProblem final : public NcpProblem {
   StepStage stage() const { return stage_; }
   void set_stage(StepStage stage) { stage_ = stage; }
   // Stage 1's start-of-step contact frames from z_start, a solution at the start of the step (the previous step's
-  // stage 1): per block whose entry of `known` is nonzero, its normal and closest points. A block without (a new pair)
-  // uses the end-of-step frame like the paper's step. Call after BeginStep.
+  // stage 1): per block whose entry of `known` is nonzero and that is closed in z_start (touching or pushing), its
+  // normal and closest points. Any other block (a new pair, an impact) uses the end-of-step frame like the paper's
+  // step. Call after BeginStep.
   void SetStartFrames(const Eigen::VectorXd& z_start, const std::vector<char>& known);
   bool uses_start_frame(int block) const { return use_start_frame_[block] != 0; }
   // After a stage-1 solution z: the pairs with a start frame whose active inequalities (alpha, beta > 0) differ from
   // the start's (a vertex or face switch of a polytope) fall back to the end-of-step frame; returns how many.
   int FallBackWhereActiveSetsChanged(const Eigen::VectorXd& z);
+  // Every pair on the end-of-step frame; returns how many had a start frame.
+  int FallBackToEndFrames();
   // Fixes the end-of-step geometry of the stage-1 solution z1 for stage 2 (poses, closest points, the stage-1
   // impulses, which pairs and joint limits are closed) and writes stage 2's initial guess into *z2: stage 1 repeated
   // (totals 2 x stage 1's force, the same fractions and slip, v1 = 2 v_half - v0), which Newton finishes in a few

@@ -22,6 +22,7 @@ struct StepReport {
   bool converged = false;       // the NCP (every sub-step's, if the step was split) was solved to tolerance
   bool advanced = false;        // the state was advanced (false only when no finite solution was found)
   int projected_solves = 0;     // solves whose warm start failed and that were retried with projected multipliers
+  int end_frame_retries = 0;    // RATTLE: stage-1 warm starts retried with every pair on its end-of-step frame
   int cold_restarts = 0;        // solves whose warm start failed and that were retried from a cold start
   int proximal_solves = 0;      // solves that went on to the proximal-point rung after the cold start failed
   int smoothed_solves = 0;      // solves that went on to a smoothing continuation after the cold start failed
