@@ -51,10 +51,11 @@ void SeedPair(const Model& model, const State& state, int c, const StepProblem& 
 
 namespace {
 
-// The state's velocities of the problem's moving bodies.
+// The state's velocities of the problem's moving bodies (a free flight's half step in RATTLE's stage 1).
 void SeedVelocities(const State& state, const StepProblem& problem, Eigen::VectorXd* z) {
   const std::vector<int>& slots = problem.slots();
   for (size_t i = 0; i < slots.size(); ++i) z->segment<6>(6 * i) = state.v.segment<6>(Model::v_offset(slots[i]));
+  problem.PredictFreeFlight(z);
 }
 
 }  // namespace

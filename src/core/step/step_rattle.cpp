@@ -5,7 +5,7 @@
 //   m (v1 - v_half) / h = f / 2 + sum F2,   (I_W(R1) w1 - L_half) / h = tau / 2 + sum (r1 x F2 + torsion2)
 // per pair closed at the end of stage 1 (gap <= kClosedGap or a stage-1 force), with the TOTAL force Ln of the step
 // and the total friction fractions S of its end frame (n1, t1, o1):
-//   0 <= Ln / Fs _|_ h (n1 . v_rel1) >= 0                    (restitution 0 on the total impulse)
+//   0 <= Ln / Fs _|_ n1 . v_rel1 >= 0                        (restitution 0 on the total impulse)
 //   e_t (t1 . v_rel1) + S_t sigma = 0 (and o, r alike),  0 <= sigma _|_ 1 - |S|^2 >= 0
 //   F2 = Ln (n1 + mu (e_t S_t t1 + e_o S_o o1)) - F1,  torsion2 = mu e_r Ln S_r n1 - torsion1
 // where F1, torsion1 are stage 1's force and torsion vector: the step's impulse is h (F1 + F2), inside the friction
@@ -14,6 +14,8 @@
 // friction on the total fraction S; half the damping and effort, as in stage 1.
 #include <algorithm>
 #include <cmath>
+
+#include <Eigen/Cholesky>
 
 #include "contact_frame.h"
 #include "implicit_sim/core/ncp/fischer_burmeister.h"
@@ -117,10 +119,23 @@ int StepProblem::FallBackToEndFrames() {
   return count;
 }
 
-void StepProblem::BeginVelocityStage(const Eigen::VectorXd& z1, Eigen::VectorXd* z2) {
+void StepProblem::PredictFreeFlight(Eigen::VectorXd* z) const {
+  if (stage_ != StepStage::kPosition || !blocks_.empty() || !joints_.empty()) return;
+  for (size_t i = 0; i < slots_.size(); ++i) {
+    const Body& body = model_.bodies[bodies_[slot_body_[i]]];
+    const int row = static_cast<int>(6 * i);
+    const Vec3 f_ext = body.mass * model_.gravity_W + body.f_applied_W + external_wrench_W_.segment<3>(row);
+    for (int k = 0; k < 3; ++k) {
+      if (!locked_row_[row + k]) (*z)[row + k] += 0.5 * h_ * f_ext[k] / body.mass;
+    }
+  }
+}
+
+void StepProblem::BeginVelocityStage(const Eigen::VectorXd& z1, const Eigen::VectorXd& raw_rows1,
+                                     Eigen::VectorXd* z2) {
   stage_ = StepStage::kPosition;
-  eval_ = EvalContext();
-  EvaluateAll(z1, &stage1_rows_);  // also updates the end-of-step bodies
+  UpdateBodies(z1);
+  stage1_rows_ = raw_rows1;  // the body rows are equations: raw and reformulated alike
   stage1_z_ = z1;
   *z2 = z1;
   for (size_t b = 0; b < bodies_.size(); ++b) {
@@ -139,6 +154,14 @@ void StepProblem::BeginVelocityStage(const Eigen::VectorXd& z1, Eigen::VectorXd*
                   hFs * stage1_rows_.segment<3>(e.col + 3);
     z2->segment<3>(e.col) = 2.0 * e.v - s.v0;
     z2->segment<3>(e.col + 3) = 2.0 * e.w - s.w0;
+    if (blocks_.empty() && joints_.empty()) {  // free flight: stage 2's exact solution (no locked axis: see rows)
+      const int row = e.col;
+      const Vec3 tau_ext = body.tau_applied_W + external_wrench_W_.segment<3>(row + 3);
+      const Mat3 I_W1 = e.R * body.I_B * e.R.transpose();
+      bool locked = false;
+      for (int k = 0; k < 6; ++k) locked = locked || locked_row_[row + k];
+      if (!locked) z2->segment<3>(row + 3) = I_W1.ldlt().solve(half.L_half + 0.5 * h_ * tau_ext);
+    }
   }
   velocity_kind_ = complementarity_kind_;
   for (size_t c = 0; c < blocks_.size(); ++c) {
@@ -256,12 +279,13 @@ void StepProblem::AddPairVelocityStage(int c, const Eigen::VectorXd& z, Eigen::V
       AddJ(row, blk.sigma(), closed && !clamp ? S[k] : 0.0);
     }
   }
-  // The normal law on the total force: 0 <= Ln / Fs _|_ h (n . v_rel) >= 0 (m).
+  // The normal law on the total force: 0 <= Ln / Fs _|_ n . v_rel >= 0 (m/s, like the friction rows: in metres,
+  // h (n . v_rel), the tolerance would leave a resting body sinking at tolerance / h).
   if (closed) {
-    const FB fb = FischerBurmeister(Ln / Fs, h_ * n.dot(v_rel), eval_.mode.smoothing, eval_.mode.raw);
+    const FB fb = FischerBurmeister(Ln / Fs, n.dot(v_rel), eval_.mode.smoothing, eval_.mode.raw);
     (*Phi)[blk.ln()] = fb.value;
     if (want_J) AddJ(blk.ln(), blk.ln(), (fb.da + eval_.mode.regularization) / Fs);
-    add_rates(blk.ln(), fb.db * h_, n, zero);
+    add_rates(blk.ln(), fb.db, n, zero);
   } else {
     (*Phi)[blk.ln()] = (Ln - stage1_z_[blk.ln()]) / Fs;
     if (want_J) AddJ(blk.ln(), blk.ln(), 1.0 / Fs);
@@ -323,15 +347,15 @@ void StepProblem::AddJointRowsVelocityStage(const Eigen::VectorXd& z, Eigen::Vec
     const JointGradient& G_q = joint_position_end_[j];
     const double rate = G_q.Rate(eP.v, eP.w, eC.v, eC.w);
     if (joint.applied_effort != 0.0) AddJointForce(G_q, 0.5 * joint.applied_effort, -1, 0.0, eP, eC, Phi);
-    if (joint.limited) {  // the total limit multipliers: 0 <= L_lo _|_ h qdot >= 0, 0 <= L_hi _|_ -h qdot >= 0
+    if (joint.limited) {  // the total limit multipliers: 0 <= L_lo _|_ qdot >= 0, 0 <= L_hi _|_ -qdot >= 0
       for (int k = 0; k < 2; ++k) {
         const int col = o + m + k;
         const double sign = k == 0 ? 1.0 : -1.0;
         if (limit_closed_[j][k]) {
-          const FB fb = FischerBurmeister(z[col] / Fs, sign * h_ * rate, eval_.mode.smoothing, eval_.mode.raw);
+          const FB fb = FischerBurmeister(z[col] / Fs, sign * rate, eval_.mode.smoothing, eval_.mode.raw);
           (*Phi)[col] = fb.value;
           if (WantJacobian()) AddJ(col, col, (fb.da + eval_.mode.regularization) / Fs);
-          AddRateRow(col, G_q, eP, eC, sign * fb.db * h_);
+          AddRateRow(col, G_q, eP, eC, sign * fb.db);
         } else {
           (*Phi)[col] = (z[col] - stage1_z_[col]) / Fs;
           if (WantJacobian()) AddJ(col, col, 1.0 / Fs);

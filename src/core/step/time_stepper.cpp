@@ -167,8 +167,10 @@ struct IslandStepInputs {
 
 // The rest of a RATTLE step after stage 1 left its solution in island->z: the pairs whose active inequalities changed
 // fall back to the end frame and stage 1 is solved again (if it had converged); then stage 2 from stage 1 repeated.
-// Returns whether both converged; the problem is left in stage 1.
-bool FinishRattleStep(const StepperOptions& options, bool stage1_converged, IslandSolve* island, StepReport* report) {
+// Returns whether both converged, and stage 1's complementarity error in *stage1_complementarity; the problem is left
+// in stage 1.
+bool FinishRattleStep(const StepperOptions& options, bool stage1_converged, IslandSolve* island, StepReport* report,
+                      double* stage1_complementarity) {
   StepProblem& problem = island->problem;
   bool converged = stage1_converged;
   if (converged && problem.FallBackWhereActiveSetsChanged(island->z) > 0) {
@@ -177,7 +179,8 @@ bool FinishRattleStep(const StepperOptions& options, bool stage1_converged, Isla
     report->residual_evaluations += again.residual_evaluations;
     converged = again.converged;
   }
-  problem.BeginVelocityStage(island->z, &island->z_velocity);
+  *stage1_complementarity = ComputeNcpError(problem, island->z, &island->ncp_error_rows).complementarity;
+  problem.BeginVelocityStage(island->z, island->ncp_error_rows, &island->z_velocity);
   const NcpSummary velocity = SolveVelocityStage(options, island, report);
   problem.set_stage(StepStage::kPosition);
   report->residual = std::max(report->residual, velocity.residual);
@@ -218,8 +221,9 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
     result.converged = false;
   }
   // Stage 2 after a converged stage 1, or after the best stage 1 of the shortest sub-step (which is then accepted).
+  double stage1_complementarity = 0.0;
   if (rattle && island->z.allFinite() && (result.converged || last_chance)) {
-    result.converged = FinishRattleStep(options, result.converged, island, report);
+    result.converged = FinishRattleStep(options, result.converged, island, report, &stage1_complementarity);
   }
   const Eigen::VectorXd& z_velocity = rattle ? island->z_velocity : island->z;
   if (!result.converged && depth < Data::kMaxSubstepDepth) {
@@ -244,12 +248,14 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
   }
   report->converged = report->converged && result.converged;
   report->residual = std::max(report->residual, result.residual);
-  const NcpError error = ComputeNcpError(problem, island->z, &island->ncp_error_rows);
-  report->complementarity_error = std::max(report->complementarity_error, error.complementarity);
   if (rattle) {  // the contact results of the step: stage 1's closest points, the total forces of stage 2
     problem.set_stage(StepStage::kVelocity);
     const NcpError velocity_error = ComputeNcpError(problem, z_velocity, &island->ncp_error_rows);
-    report->complementarity_error = std::max(report->complementarity_error, velocity_error.complementarity);
+    report->complementarity_error =
+        std::max({report->complementarity_error, stage1_complementarity, velocity_error.complementarity});
+  } else {
+    const NcpError error = ComputeNcpError(problem, island->z, &island->ncp_error_rows);
+    report->complementarity_error = std::max(report->complementarity_error, error.complementarity);
   }
   problem.Contacts(z_velocity, &island->contacts);
   for (size_t i = 0; i < island->joints.size(); ++i) {

@@ -67,7 +67,11 @@ void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, b
       z[problem.blocks()[c].offset + pair_index::kD] = c % 2 == 0 ? 0.0 : 0.05;
       z[problem.blocks()[c].ln()] = c % 2 == 0 ? 0.7 : 0.0;
     }
-    problem.BeginVelocityStage(z, &z2);
+    Eigen::VectorXd raw_rows;
+    NcpEvalMode raw;
+    raw.raw = true;
+    problem.Evaluate(z, raw, &raw_rows, nullptr);
+    problem.BeginVelocityStage(z, raw_rows, &z2);
     std::mt19937 rng(seed + 200);
     z = z2 + 0.2 * ncp_test::RandomVector(z.size(), &rng);
   }

@@ -129,11 +129,15 @@ class StepProblem final : public NcpProblem {
   int FallBackWhereActiveSetsChanged(const Eigen::VectorXd& z);
   // Every pair on the end-of-step frame; returns how many had a start frame.
   int FallBackToEndFrames();
+  // In stage 1 of a problem without pairs or joints (a body in free flight): v_half = v0 + h f / (2 m) in *z, the
+  // solution of its linear rows, so that a falling body's stage 1 needs no Newton iteration for them.
+  void PredictFreeFlight(Eigen::VectorXd* z) const;
   // Fixes the end-of-step geometry of the stage-1 solution z1 for stage 2 (poses, closest points, the stage-1
   // impulses, which pairs and joint limits are closed) and writes stage 2's initial guess into *z2: stage 1 repeated
   // (totals 2 x stage 1's force, the same fractions and slip, v1 = 2 v_half - v0), which Newton finishes in a few
-  // iterations. Leaves the problem in kVelocity.
-  void BeginVelocityStage(const Eigen::VectorXd& z1, Eigen::VectorXd* z2);
+  // iterations. raw_rows1: stage 1's raw rows at z1 (ComputeNcpError's), whose body rows correct the momenta.
+  // Leaves the problem in kVelocity.
+  void BeginVelocityStage(const Eigen::VectorXd& z1, const Eigen::VectorXd& raw_rows1, Eigen::VectorXd* z2);
 
   // Stores the start-of-step quantities (poses, velocities, world inertia) and the external wrenches
   // of the step: 6 values per moving body slot (force N, torque N m; world frame, at the centre of mass), or null.
