@@ -49,8 +49,10 @@ def read_csv(path):
 def run(runner, scene, duration, h, work, scheme="paper"):
     """One run with the paper's step, or with the second-order RATTLE step (scheme "rattle")."""
     out = os.path.join(work, f"{os.path.splitext(scene)[0]}_h{h:g}_T{duration:g}_{scheme}")
-    subprocess.run([runner, "--scene", os.path.join(REPO, "scenes", scene), "--duration", str(duration), "--dt",
-                    str(h), "--scheme", scheme, "--out", out], check=True, stdout=subprocess.DEVNULL)
+    status = subprocess.run([runner, "--scene", os.path.join(REPO, "scenes", scene), "--duration", str(duration),
+                             "--dt", str(h), "--scheme", scheme, "--out", out], stdout=subprocess.DEVNULL).returncode
+    if status not in (0, 1):  # 1: a step did not converge, which the figure's checks report
+        raise RuntimeError(f"{runner} exited with {status} on {scene}")
     with open(os.path.join(out, "summary.json")) as f:
         return read_csv(os.path.join(out, "trajectory.csv")), json.load(f)
 
