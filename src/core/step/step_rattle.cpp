@@ -62,6 +62,7 @@ bool SameActiveSet(const double* x, const double* y, int count) {
 // principal spin is exact for any h w; F still solves the plain row for the momentum g L, and since the plain row
 // conserves the energy of a free body for any momentum and the energy is quadratic, the energy is still conserved
 // exactly; the row stays symmetric (g depends only on the angle of F), so the step stays second order.
+// Near h |w| = pi (g -> 0) a general rotation has no solution: the solve fails and the stepper splits the step.
 Vec3 StepProblem::DiscreteMomentum(const Mat3& I_B, const Mat3& R0, const Mat3& R1, const Vec3& w, double h,
                                    Mat3* dL_dtheta, Mat3* dL_dw) {
   const Mat3 Jd = 0.5 * I_B.trace() * Mat3::Identity() - I_B;
