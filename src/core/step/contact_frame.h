@@ -25,6 +25,13 @@ inline Vec3 LeastAlignedAxis(const Vec3& n) {
   return Vec3::Unit(axis);
 }
 
+inline Pose MakePose(const Vec3& p, const Mat3& R) {
+  Pose X = Pose::Identity();
+  X.translation() = p;
+  X.linear() = R;
+  return X;
+}
+
 // Velocity of the material point of body 1 at lever arm r1 (from its centre of mass) relative to body 2's at r2, with
 // each body's linear velocity v (at the centre of mass) and angular velocity w (world frame).
 inline Vec3 RelativeVelocity(const Vec3& v1, const Vec3& w1, const Vec3& r1, const Vec3& v2, const Vec3& w2,

@@ -16,20 +16,11 @@
 // Commanded joint efforts enter as external wrenches (AddJointEffortWrench) along the same G_q.
 #include <cmath>
 
+#include "contact_frame.h"
 #include "implicit_sim/core/ncp/fischer_burmeister.h"
 #include "implicit_sim/core/step/step_problem.h"
 
 namespace implicit_sim {
-namespace {
-
-Pose MakePose(const Vec3& p, const Mat3& R) {
-  Pose X = Pose::Identity();
-  X.translation() = p;
-  X.linear() = R;
-  return X;
-}
-
-}  // namespace
 
 void StepProblem::BeginJoints() {
   for (int j : joints_) {

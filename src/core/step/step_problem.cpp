@@ -312,8 +312,8 @@ void StepProblem::AddBodyRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) co
     const Body& body = model_.bodies[bodies_[slot_body_[i]]];
     const BodyStep& s = start_[slot_body_[i]];
     const int row = static_cast<int>(6 * i);
-    const Vec3 f_ext = body.mass * model_.gravity_W + body.f_applied_W + external_wrench_W_.segment<3>(row);
-    const Vec3 tau_ext = body.tau_applied_W + external_wrench_W_.segment<3>(row + 3);
+    const Vec3 f_ext = ExternalForce(i);
+    const Vec3 tau_ext = ExternalTorque(i);
     const BodyEnd& e = end_[slot_body_[i]];
     AddJ(row, row, Mat3(Mat3::Identity() * body.mass / (h_ * Fs)));
     if (stage_ == StepStage::kPosition) {

@@ -30,13 +30,6 @@ constexpr double kClosedGap = 1e-9;
 // An inequality counts as active at a closest point when its multiplier exceeds this share of the largest.
 constexpr double kActiveShare = 1e-6;
 
-Pose MakePose(const Vec3& p, const Mat3& R) {
-  Pose X = Pose::Identity();
-  X.translation() = p;
-  X.linear() = R;
-  return X;
-}
-
 Vec3 Vee(const Mat3& S) { return Vec3(S(2, 1), S(0, 2), S(1, 0)); }
 
 // Whether the multipliers x[0 .. count) have the same active set as y[0 .. count).
@@ -125,7 +118,7 @@ void StepProblem::PredictFreeFlight(Eigen::VectorXd* z) const {
   for (size_t i = 0; i < slots_.size(); ++i) {
     const Body& body = model_.bodies[bodies_[slot_body_[i]]];
     const int row = static_cast<int>(6 * i);
-    const Vec3 f_ext = body.mass * model_.gravity_W + body.f_applied_W + external_wrench_W_.segment<3>(row);
+    const Vec3 f_ext = ExternalForce(i);
     for (int k = 0; k < 3; ++k) {
       if (!locked_row_[row + k]) (*z)[row + k] += 0.5 * h_ * f_ext[k] / body.mass;
     }
@@ -157,7 +150,7 @@ void StepProblem::BeginVelocityStage(const Eigen::VectorXd& z1, const Eigen::Vec
     z2->segment<3>(e.col + 3) = 2.0 * e.w - s.w0;
     if (blocks_.empty() && joints_.empty()) {  // free flight: stage 2's exact solution (no locked axis: see rows)
       const int row = e.col;
-      const Vec3 tau_ext = body.tau_applied_W + external_wrench_W_.segment<3>(row + 3);
+      const Vec3 tau_ext = ExternalTorque(row / 6);
       const Mat3 I_W1 = e.R * body.I_B * e.R.transpose();
       bool locked = false;
       for (int k = 0; k < 6; ++k) locked = locked || locked_row_[row + k];
@@ -213,8 +206,8 @@ void StepProblem::AddBodyRowsVelocityStage(const Eigen::VectorXd& z, Eigen::Vect
     const Body& body = model_.bodies[bodies_[local]];
     const BodyHalf& half = half_[local];
     const int row = static_cast<int>(6 * i);
-    const Vec3 f_ext = body.mass * model_.gravity_W + body.f_applied_W + external_wrench_W_.segment<3>(row);
-    const Vec3 tau_ext = body.tau_applied_W + external_wrench_W_.segment<3>(row + 3);
+    const Vec3 f_ext = ExternalForce(i);
+    const Vec3 tau_ext = ExternalTorque(i);
     const Mat3 I_W1 = half.R1 * body.I_B * half.R1.transpose();
     Phi->segment<3>(row) = (body.mass * (z.segment<3>(row) - half.v_half) / h_ - 0.5 * f_ext) / Fs;
     Phi->segment<3>(row + 3) = ((I_W1 * z.segment<3>(row + 3) - half.L_half) / h_ - 0.5 * tau_ext) / Fs;

@@ -219,6 +219,15 @@ class StepProblem final : public NcpProblem {
   };
 
   void UpdateBodies(const Eigen::VectorXd& z) const;
+  // The constant external force (N) and torque (N m) on the i-th moving body of the problem over the step: gravity,
+  // the model's applied wrench and BeginStep's external wrench (world frame, at the centre of mass).
+  Vec3 ExternalForce(int i) const {
+    const Body& body = model_.bodies[bodies_[slot_body_[i]]];
+    return body.mass * model_.gravity_W + body.f_applied_W + external_wrench_W_.segment<3>(6 * i);
+  }
+  Vec3 ExternalTorque(int i) const {
+    return model_.bodies[bodies_[slot_body_[i]]].tau_applied_W + external_wrench_W_.segment<3>(6 * i + 3);
+  }
   // Stage 1's rotation row: the discrete angular momentum (1/h) R0 vee(F Jd - Jd F^T) / sinc(h |w|), F = R0^T R1 =
   // Exp(h R0^T w), of a body with body inertia I_B (step_rattle.cpp), and its derivatives with respect to the
   // end-of-step rotation increment theta (R1 -> Exp(theta) R1) at fixed w and to w at fixed R1 (either may be null).
