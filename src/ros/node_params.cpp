@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <fstream>
+#include <set>
+#include <vector>
 #include <stdexcept>
 
 #include "implicit_sim/core/base/format.h"
@@ -47,15 +49,41 @@ void ReadOptionParams(const ros::NodeHandle& pnh, StepperOptions* options) {
   }
 }
 
+// The node's own private parameters besides the options table's.
+const char* const kNodeParams[] = {"scene",         "scenes_dir",        "publish_rate",
+                                   "real_time_factor", "paused",          "on_fault",
+                                   "world_frame",   "force_marker_scale", "contact_marker_size",
+                                   "publish_joint_link_tf", "clock_rate"};
+
+void RefuseUnknownParams(const ros::NodeHandle& pnh) {
+  std::vector<std::string> names;
+  if (!ros::param::getParamNames(names)) return;
+  const std::string prefix = pnh.getNamespace() + "/";
+  std::set<std::string> known(std::begin(kNodeParams), std::end(kNodeParams));
+  for (const OptionRow& row : OptionTable()) {
+    if (*row.ros_param != '\0') known.insert(row.ros_param);
+  }
+  for (const std::string& name : names) {
+    if (name.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::string own = name.substr(prefix.size());
+    if (known.count(own.substr(0, own.find('/')))) continue;
+    std::string list;
+    for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+    throw std::invalid_argument("unknown parameter ~" + own + " (the node reads: " + list + ")");
+  }
+}
+
 }  // namespace
 
 NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
+  RefuseUnknownParams(pnh);
   NodeParams p;
   p.scene = ReadParam<std::string>(pnh, "scene", "");
   p.scenes_dir = ReadParam<std::string>(pnh, "scenes_dir", IMPLICIT_SIM_SCENES_DIR);
   ReadOptionParams(pnh, &p.options);
   p.publish_rate = ReadParam(pnh, "publish_rate", p.publish_rate);
   p.real_time_factor = ReadParam(pnh, "real_time_factor", p.real_time_factor);
+  p.clock_rate = ReadParam(pnh, "clock_rate", p.clock_rate);
   p.paused = ReadParam(pnh, "paused", p.paused);
   p.on_fault = ReadParam(pnh, "on_fault", p.on_fault);
   if (p.on_fault != "pause" && p.on_fault != "reset") {
@@ -67,12 +95,20 @@ NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
   p.publish_joint_link_tf = ReadParam(pnh, "publish_joint_link_tf", p.publish_joint_link_tf);
   CheckRange("publish_rate", p.publish_rate, 0.0, 1000.0, true, "Hz");
   CheckRange("real_time_factor", p.real_time_factor, 0.0, 1000.0, false, "(0: as fast as possible)");
+  CheckRange("clock_rate", p.clock_rate, 0.0, 1e6, true, "Hz of simulation time");
   CheckRange("force_marker_scale", p.force_marker_scale, 0.0, 100.0, true, "m/N");
   CheckRange("contact_marker_size", p.contact_marker_size, 0.0, 100.0, true, "m");
   if (p.world_frame.empty()) throw std::invalid_argument("parameter ~world_frame must not be empty");
   std::string error;
   if (!p.options.IsValid(&error)) throw std::invalid_argument(error);
   return p;
+}
+
+void CheckWorldFrame(const Model& model, const std::string& world_frame) {
+  if (model.FindBody(world_frame) >= 0) {
+    throw std::invalid_argument("parameter ~world_frame = '" + world_frame +
+                                "' is a link of the scene: it must be a frame name of its own (default world)");
+  }
 }
 
 Model LoadNodeScene(const ros::NodeHandle& nh, const NodeParams& p) {

@@ -18,13 +18,12 @@ namespace implicit_sim {
 namespace conv = ros_conversions;
 namespace {
 
+ros::Time Stamp(double sim_time) { return ros::Time().fromSec(sim_time); }
+
 // The effort the core applies for a command: clamped to the URDF effort limit, plus the scene's constant effort.
 double AppliedEffort(const Joint& joint, double commanded) {
   return ClampJointEffort(joint, commanded) + joint.applied_effort;
 }
-
-// Contact results exist once a step has run.
-bool HaveContacts(const State& snapshot) { return snapshot.t > 0.0; }
 
 }  // namespace
 
@@ -33,11 +32,42 @@ void SimNode::AdvertiseTopics() {
   // Latched: a subscriber that connects late (rviz started while paused) gets the last transforms at once, since
   // /tf is never republished with a stamp it already carried (tf2 would warn TF_REPEATED_DATA).
   tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", 100, true);
-  contacts_pub_ = pnh_.advertise<implicit_sim::Contacts>("contacts", 10);
-  markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("markers", 10);
+  // The per-state topics are sent when the state changes, and the current one to each new subscriber at once
+  // (so a subscriber of a paused simulation is not left waiting). ~markers sends a new subscriber the shapes,
+  // frame-locked to their link frames (tf moves them, so they are never sent again), with the current contacts.
+  const auto on_connect = [this](void (SimNode::*send)(const Snapshot&, const ros::SingleSubscriberPublisher&)) {
+    return [this, send](const ros::SingleSubscriberPublisher& to) { (this->*send)(*Latest(), to); };
+  };
+  contacts_pub_ = pnh_.advertise<implicit_sim::Contacts>("contacts", 10, on_connect(&SimNode::SendContacts));
+  markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("markers", 10, on_connect(&SimNode::SendMarkers));
   stats_pub_ = pnh_.advertise<implicit_sim::StepStats>("step_stats", 100);
-  body_states_pub_ = pnh_.advertise<implicit_sim::BodyStates>("body_states", 10);
-  joint_states_pub_ = nh_.advertise<sensor_msgs::JointState>("joint_states", 10);
+  body_states_pub_ =
+      pnh_.advertise<implicit_sim::BodyStates>("body_states", 10, on_connect(&SimNode::SendBodyStates));
+  joint_states_pub_ =
+      nh_.advertise<sensor_msgs::JointState>("joint_states", 10, on_connect(&SimNode::SendJointStates));
+}
+
+void SimNode::SendContacts(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to) {
+  to.publish(ContactsMsg(snapshot));
+}
+
+void SimNode::SendBodyStates(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to) {
+  to.publish(conv::ToBodyStatesMsg(*snapshot.model, snapshot.state, Stamp(snapshot.sim_time), params_.world_frame));
+}
+
+void SimNode::SendJointStates(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to) {
+  const sensor_msgs::JointState msg = JointStatesMsg(snapshot);
+  if (!msg.name.empty()) to.publish(msg);
+}
+
+void SimNode::SendMarkers(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to) {
+  visualization_msgs::MarkerArray msg = conv::ShapeMarkers(*snapshot.model);
+  for (const ContactResult& contact : snapshot.contacts) {
+    if (!snapshot.stepped || !conv::IsActiveContact(contact, options_.contact_threshold)) continue;
+    conv::AppendContactMarkers(contact.pair, contact, true, params_.world_frame, params_.force_marker_scale,
+                               params_.contact_marker_size, &msg);
+  }
+  to.publish(msg);
 }
 
 void SimNode::PublishClock(double sim_time) {
@@ -53,8 +83,8 @@ void SimNode::PublishStepStats(const StepReport& report, double sim_time, uint64
   stats_pub_.publish(conv::ToStepStatsMsg(report, sim_time, step, rtf, params_.world_frame));
 }
 
-void SimNode::PublishStaticTf() {
-  const std::vector<geometry_msgs::TransformStamped> statics = conv::ToStaticTransforms(model_, params_.world_frame);
+void SimNode::PublishStaticTf(const Model& model) {
+  const std::vector<geometry_msgs::TransformStamped> statics = conv::ToStaticTransforms(model, params_.world_frame);
   if (!statics.empty()) static_broadcaster_.sendTransform(statics);
 }
 
@@ -64,45 +94,53 @@ void SimNode::PublishTf(const Snapshot& snapshot, const ros::Time& stamp, Publis
   if (snapshot.sim_time <= memory->last_tf_time) return;
   memory->last_tf_time = snapshot.sim_time;
   tf2_msgs::TFMessage msg;
-  msg.transforms = conv::ToLinkTransforms(model_, snapshot.state, memory->on_tf, stamp, params_.world_frame);
+  msg.transforms =
+      conv::ToLinkTransforms(*snapshot.model, snapshot.state, memory->on_tf, stamp, params_.world_frame);
   if (!msg.transforms.empty()) tf_pub_.publish(msg);  // one batched /tf message
 }
 
-void SimNode::PublishJointStates(const State& snapshot, const Eigen::VectorXd& efforts, const ros::Time& stamp) {
-  if (joint_states_pub_.getNumSubscribers() == 0) return;
+sensor_msgs::JointState SimNode::JointStatesMsg(const Snapshot& snapshot) const {
+  const Model& model = *snapshot.model;
   sensor_msgs::JointState msg;
-  msg.header.stamp = stamp;
-  for (int j = 0; j < static_cast<int>(model_.joints.size()); ++j) {
-    const Joint& joint = model_.joints[j];
+  msg.header.stamp = Stamp(snapshot.sim_time);
+  for (int j = 0; j < static_cast<int>(model.joints.size()); ++j) {
+    const Joint& joint = model.joints[j];
     if (!joint.has_coordinate()) continue;  // fixed joints are not in JointState
     msg.name.push_back(joint.name);
-    msg.position.push_back(JointPosition(model_, snapshot, j));
-    msg.velocity.push_back(JointVelocity(model_, snapshot, j));
-    msg.effort.push_back(AppliedEffort(joint, efforts[j]));
+    msg.position.push_back(JointPosition(model, snapshot.state, j));
+    msg.velocity.push_back(JointVelocity(model, snapshot.state, j));
+    msg.effort.push_back(AppliedEffort(joint, snapshot.efforts[j]));
   }
-  if (!msg.name.empty()) joint_states_pub_.publish(msg);
+  return msg;
 }
 
-void SimNode::PublishBodyStates(const Snapshot& snapshot, const ros::Time& stamp) {
-  if (body_states_pub_.getNumSubscribers() == 0) return;
-  body_states_pub_.publish(conv::ToBodyStatesMsg(model_, snapshot.state, stamp, params_.world_frame));
-}
-
-void SimNode::PublishContacts(const Snapshot& snapshot, const ros::Time& stamp) {
-  if (contacts_pub_.getNumSubscribers() == 0) return;
+implicit_sim::Contacts SimNode::ContactsMsg(const Snapshot& snapshot) const {
   static const std::vector<ContactResult> kNone;
-  const std::vector<ContactResult>& contacts = HaveContacts(snapshot.state) ? snapshot.contacts : kNone;
-  contacts_pub_.publish(conv::ToContactsMsg(model_, contacts, options_.contact_threshold, stamp, params_.world_frame));
+  return conv::ToContactsMsg(*snapshot.model, snapshot.stepped ? snapshot.contacts : kNone,
+                             options_.contact_threshold, Stamp(snapshot.sim_time), params_.world_frame);
 }
 
-void SimNode::PublishMarkers(const Snapshot& snapshot, const ros::Time& stamp, PublishMemory* memory) {
+void SimNode::PublishStateTopics(const Snapshot& snapshot, PublishMemory* memory) {
+  PublishTf(snapshot, Stamp(snapshot.sim_time), memory);  // only when time has moved
+  if (joint_states_pub_.getNumSubscribers() > 0) {
+    const sensor_msgs::JointState msg = JointStatesMsg(snapshot);
+    if (!msg.name.empty()) joint_states_pub_.publish(msg);
+  }
+  if (body_states_pub_.getNumSubscribers() > 0) {
+    body_states_pub_.publish(
+        conv::ToBodyStatesMsg(*snapshot.model, snapshot.state, Stamp(snapshot.sim_time), params_.world_frame));
+  }
+  if (contacts_pub_.getNumSubscribers() > 0) contacts_pub_.publish(ContactsMsg(snapshot));
+  PublishContactMarkers(snapshot, memory);
+}
+
+void SimNode::PublishContactMarkers(const Snapshot& snapshot, PublishMemory* memory) {
   if (markers_pub_.getNumSubscribers() == 0) return;
-  visualization_msgs::MarkerArray msg = memory->shapes;
-  for (auto& m : msg.markers) m.header.stamp = stamp;
+  visualization_msgs::MarkerArray msg;
   std::vector<int>& active = memory->active_pairs;
   active.clear();
   for (const ContactResult& contact : snapshot.contacts) {
-    if (!HaveContacts(snapshot.state) || !conv::IsActiveContact(contact, options_.contact_threshold)) continue;
+    if (!snapshot.stepped || !conv::IsActiveContact(contact, options_.contact_threshold)) continue;
     conv::AppendContactMarkers(contact.pair, contact, true, params_.world_frame, params_.force_marker_scale,
                                params_.contact_marker_size, &msg);
     active.push_back(contact.pair);
@@ -114,35 +152,37 @@ void SimNode::PublishMarkers(const Snapshot& snapshot, const ros::Time& stamp, P
                                params_.contact_marker_size, &msg);
   }
   memory->shown_pairs.swap(active);
-  markers_pub_.publish(msg);
+  if (!msg.markers.empty()) markers_pub_.publish(msg);
 }
 
 void SimNode::UpdateDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (diag_failed_ > 0) {
-    const std::string what = paused_ ? "simulation paused: " : "bodies reset: ";
-    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "step refused, " + what + last_failure_);
-  } else if (diag_nonconverged_ > 0) {
+  std::lock_guard<std::mutex> lock(diag_mutex_);
+  DiagnosticCounters& d = diag_;
+  if (d.fault_holds) {  // until ~unpause or ~reset: the simulation stays halted by the fault
+    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "step refused, simulation paused: " + d.last_failure);
+  } else if (d.failed > 0) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "step refused, bodies reset: " + d.last_failure);
+  } else if (d.nonconverged > 0) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "some steps did not converge");
   } else {
-    status.summary(diagnostic_msgs::DiagnosticStatus::OK, paused_ ? "paused" : "running");
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, d.paused ? "paused" : "running");
   }
-  status.add("sim_time_s", SimTime());
-  status.add("steps_since_last_report", diag_steps_);
-  status.add("nonconverged_steps_since_last_report", diag_nonconverged_);
-  status.add("failed_steps_since_last_report", diag_failed_);
-  status.add("received_wrench_commands", received_commands_);
-  status.add("dropped_wrench_commands", dropped_commands_);
-  status.add("received_joint_effort_commands", received_joint_commands_);
-  status.add("dropped_joint_effort_commands", dropped_joint_commands_);
+  status.add("sim_time_s", d.sim_time);
+  status.add("steps_since_last_report", d.steps);
+  status.add("nonconverged_steps_since_last_report", d.nonconverged);
+  status.add("failed_steps_since_last_report", d.failed);
+  status.add("received_wrench_commands", d.received_wrench_commands);
+  status.add("dropped_wrench_commands", d.dropped_wrench_commands);
+  status.add("received_joint_effort_commands", d.received_joint_commands);
+  status.add("dropped_joint_effort_commands", d.dropped_joint_commands);
   for (StepFault fault : {StepFault::kNotConverged, StepFault::kNoFiniteSolution, StepFault::kInitialOverlap,
                           StepFault::kDiverged, StepFault::kCrossing}) {
-    status.add(std::string("faults_") + StepFaultName(fault), faults_[static_cast<int>(fault)]);
+    status.add(std::string("faults_") + StepFaultName(fault), d.faults[static_cast<int>(fault)]);
   }
-  status.add("real_time_factor", rtf_);
-  status.add("last_iterations", last_report_.iterations);
-  status.add("last_residual", last_report_.residual);
-  diag_steps_ = diag_nonconverged_ = diag_failed_ = 0;
+  status.add("real_time_factor", d.rtf);
+  status.add("last_iterations", d.last_iterations);
+  status.add("last_residual", d.last_residual);
+  d.steps = d.nonconverged = d.failed = 0;
 }
 
 }  // namespace implicit_sim

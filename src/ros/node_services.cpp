@@ -1,6 +1,7 @@
-// The node's services and command topics: pause, unpause, reset, step, body state, wrenches (~apply_body_wrench,
+// The node's services and command topics: pause, unpause, reset, body state, wrenches (~apply_body_wrench,
 // ~wrench_cmd, ~clear_body_wrenches) and joint efforts (~set_joint_efforts, ~joint_effort_cmd; they enter the step
-// as the wrench of AddJointEffortWrench, core joints.h).
+// as the wrench of AddJointEffortWrench, core joints.h). Each runs on the physics thread between two steps
+// (RunBetweenSteps; the command topics PostBetweenSteps without waiting); ~get_body_state reads the latest snapshot.
 #include "implicit_sim/ros/sim_node.h"  // first: its generated service type Step precedes the core's function Step
 
 #include <algorithm>
@@ -24,6 +25,14 @@ void CheckWrenchValues(const Vec3& force, const Vec3& torque, std::string* error
   }
 }
 
+// A service's answer when the node stops before the physics thread ran the request.
+template <typename Response>
+bool ShuttingDown(Response& res) {
+  res.success = false;
+  res.message = "refused: the node is shutting down";
+  return true;
+}
+
 }  // namespace
 
 void SimNode::AdvertiseServices() {
@@ -38,13 +47,16 @@ void SimNode::AdvertiseServices() {
   wrench_sub_ = pnh_.subscribe("wrench_cmd", 100, &SimNode::OnWrenchCommand, this);
   services_.push_back(pnh_.advertiseService("set_joint_efforts", &SimNode::OnSetJointEfforts, this));
   joint_effort_sub_ = pnh_.subscribe("joint_effort_cmd", 100, &SimNode::OnJointEffortCommand, this);
+  run_steps_server_ = std::make_unique<actionlib::SimpleActionServer<implicit_sim::RunStepsAction>>(
+      pnh_, "run_steps", [this](const implicit_sim::RunStepsGoalConstPtr& goal) { OnRunStepsGoal(goal); }, false);
 }
 
 int SimNode::FindBodyOrFail(const std::string& name, bool must_move, std::string* error) const {
-  const int b = model_.FindBody(name);
+  const Model& model = *world_->model;
+  const int b = model.FindBody(name);
   if (b < 0) {
     *error = "unknown body '" + name + "'";
-  } else if (must_move && model_.bodies[b].is_fixed) {
+  } else if (must_move && model.bodies[b].is_fixed) {
     *error = "body '" + name + "' is fixed";
     return -1;
   }
@@ -52,152 +64,140 @@ int SimNode::FindBodyOrFail(const std::string& name, bool must_move, std::string
 }
 
 bool SimNode::OnPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  paused_ = true;
-  res.success = true;
-  res.message = "paused at t = " + FormatNumber(SimTime()) + " s";
-  return true;
+  return RunBetweenSteps([&] {
+           paused_ = true;
+           {
+             std::lock_guard<std::mutex> lock(diag_mutex_);
+             diag_.paused = true;
+           }
+           res.success = true;
+           res.message = "paused at t = " + FormatNumber(SimTime()) + " s";
+         }) || ShuttingDown(res);
 }
 
 bool SimNode::OnUnpause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    paused_ = false;
-    restart_pacing_ = true;
-    diag_failed_ = 0;
-    last_failure_.clear();
-    res.success = true;
-    res.message = "running from t = " + FormatNumber(SimTime()) + " s";
-  }
-  wake_.notify_all();
-  return true;
+  return RunBetweenSteps([&] {
+           std::lock_guard<std::mutex> lock(mailbox_mutex_);
+           if (job_.active) {
+             res.success = false;
+             res.message = "refused: a ~step or ~run_steps job is running";
+             return;
+           }
+           paused_ = false;
+           restart_pacing_ = true;
+           {
+             std::lock_guard<std::mutex> diag_lock(diag_mutex_);
+             diag_.paused = false;
+             diag_.fault_holds = false;
+             diag_.last_failure.clear();
+           }
+           res.success = true;
+           res.message = "running from t = " + FormatNumber(SimTime()) + " s";
+         }) || ShuttingDown(res);
 }
 
 bool SimNode::OnReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  ResetLocked();
-  last_failure_.clear();
-  res.success = true;
-  res.message = "bodies back to their initial state at t = " + FormatNumber(SimTime()) + " s";
-  return true;
+  return RunBetweenSteps([&] {
+           ResetWorld();
+           {
+             std::lock_guard<std::mutex> lock(diag_mutex_);
+             diag_.fault_holds = false;
+             diag_.last_failure.clear();
+           }
+           res.success = true;
+           res.message = "bodies back to their initial state at t = " + FormatNumber(SimTime()) + " s";
+         }) || ShuttingDown(res);
 }
 
 bool SimNode::OnClearWrenches(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  const size_t n = wrenches_.size();
-  wrenches_.clear();
-  commanded_W_.setZero();
-  res.success = true;
-  res.message = "cleared " + std::to_string(n) + " timed wrenches and all wrench commands";
-  return true;
-}
-
-bool SimNode::OnStep(implicit_sim::Step::Request& req, implicit_sim::Step::Response& res) {
-  StepReport report;
-  uint64_t step;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    res.sim_time = SimTime();
-    if (!paused_) {
-      res.success = false;
-      res.message = "refused: the simulation is running; call ~pause first";
-      return true;
-    }
-    if (req.steps < 1 || req.steps > 1000000) {
-      res.success = false;
-      res.message = "steps must be in [1, 1000000], got " + std::to_string(req.steps);
-      return true;
-    }
-    uint32_t done = 0;
-    for (; done < req.steps && !stopping_; ++done) {
-      StepLocked();
-      if (!last_report_.advanced) break;
-    }
-    res.sim_time = SimTime();
-    res.success = last_report_.advanced && done == req.steps;
-    res.message = res.success ? "ran " + std::to_string(done) + " steps"
-                              : "stopped after " + std::to_string(done) + " steps: " + last_failure_;
-    report = last_report_;
-    step = step_count_;
-  }
-  PublishClock(res.sim_time);
-  PublishStepStats(report, res.sim_time, step, 0.0);
-  return true;
+  return RunBetweenSteps([&] {
+           const size_t n = world_->wrenches.size();
+           world_->wrenches.clear();
+           world_->commanded_W.setZero();
+           res.success = true;
+           res.message = "cleared " + std::to_string(n) + " timed wrenches and all wrench commands";
+         }) || ShuttingDown(res);
 }
 
 bool SimNode::OnGetBodyState(implicit_sim::GetBodyState::Request& req, implicit_sim::GetBodyState::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  std::string error;
-  const int b = FindBodyOrFail(req.body, false, &error);
+  const std::shared_ptr<const Snapshot> snapshot = Latest();  // never waits for a step
+  const Model& model = *snapshot->model;
+  const int b = model.FindBody(req.body);
   res.success = b >= 0;
-  res.message = b >= 0 ? "t = " + FormatNumber(SimTime()) + " s" : error;
-  if (b >= 0) res.state = conv::ToBodyStateMsg(model_, state_, b);
+  res.message = b >= 0 ? "t = " + FormatNumber(snapshot->sim_time) + " s" : "unknown body '" + req.body + "'";
+  if (b >= 0) res.state = conv::ToBodyStateMsg(model, snapshot->state, b);
   return true;
 }
 
 bool SimNode::OnSetBodyState(implicit_sim::SetBodyState::Request& req, implicit_sim::SetBodyState::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  std::string error;
-  const int b = FindBodyOrFail(req.state.name, true, &error);
-  res.success = b >= 0 && conv::SetBodyStateFromMsg(model_, b, req.state, &state_, &error);
-  if (res.success) {
-    ClearWarmStart(&data_);  // the next step starts cold from the new configuration
-    SaveLatestLocked();
-  }
-  res.message = res.success ? "set '" + req.state.name + "'" : error;
-  return true;
+  return RunBetweenSteps([&] {
+           std::string error;
+           const int b = FindBodyOrFail(req.state.name, true, &error);
+           res.success =
+               b >= 0 && conv::SetBodyStateFromMsg(*world_->model, b, req.state, &world_->state, &error);
+           if (res.success) {
+             ClearWarmStart(world_->data.get());  // the next step starts cold from the new configuration
+             SaveSnapshot();
+           }
+           res.message = res.success ? "set '" + req.state.name + "'" : error;
+         }) || ShuttingDown(res);
 }
 
 bool SimNode::OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req,
                             implicit_sim::ApplyBodyWrench::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  std::string error;
-  res.success = false;
-  const int b = FindBodyOrFail(req.body, true, &error);
-  int frame_body = -1;
-  if (!req.reference_frame.empty() && req.reference_frame != params_.world_frame) {
-    frame_body = model_.FindBody(req.reference_frame);
-    if (frame_body < 0) error = "unknown reference_frame '" + req.reference_frame + "'";
-  }
-  TimedWrench w{b, frame_body, conv::ToVec3(req.reference_point), conv::ToVec3(req.wrench.force),
-                conv::ToVec3(req.wrench.torque), std::max(req.start_time, SimTime()), -1.0};
-  if (error.empty() && (!w.point.allFinite() || !std::isfinite(req.start_time) || !std::isfinite(req.duration))) {
-    error = "reference_point, start_time and duration must be finite";
-  }
-  if (error.empty()) CheckWrenchValues(w.force, w.torque, &error);
-  if (error.empty() && req.duration == 0.0) error = "duration must be > 0 s, or < 0 for until cleared";
-  if (!error.empty()) {
-    res.message = error;
-    return true;
-  }
-  if (req.duration > 0.0) w.end = w.start + req.duration;
-  wrenches_.push_back(w);
-  res.success = true;
-  res.message = "wrench on '" + req.body + "' from t = " + FormatNumber(w.start) + " s";
-  return true;
+  return RunBetweenSteps([&] {
+           std::string error;
+           res.success = false;
+           const int b = FindBodyOrFail(req.body, true, &error);
+           int frame_body = -1;
+           if (!req.reference_frame.empty() && req.reference_frame != params_.world_frame) {
+             frame_body = world_->model->FindBody(req.reference_frame);
+             if (frame_body < 0) error = "unknown reference_frame '" + req.reference_frame + "'";
+           }
+           TimedWrench w{b, frame_body, conv::ToVec3(req.reference_point), conv::ToVec3(req.wrench.force),
+                         conv::ToVec3(req.wrench.torque), std::max(req.start_time, SimTime()), -1.0};
+           if (error.empty() &&
+               (!w.point.allFinite() || !std::isfinite(req.start_time) || !std::isfinite(req.duration))) {
+             error = "reference_point, start_time and duration must be finite";
+           }
+           if (error.empty()) CheckWrenchValues(w.force, w.torque, &error);
+           if (error.empty() && req.duration == 0.0) error = "duration must be > 0 s, or < 0 for until cleared";
+           if (!error.empty()) {
+             res.message = error;
+             return;
+           }
+           if (req.duration > 0.0) w.end = w.start + req.duration;
+           world_->wrenches.push_back(w);
+           res.success = true;
+           res.message = "wrench on '" + req.body + "' from t = " + FormatNumber(w.start) + " s";
+         }) || ShuttingDown(res);
 }
 
 void SimNode::OnWrenchCommand(const implicit_sim::BodyWrench::ConstPtr& msg) {
-  const Vec3 f = conv::ToVec3(msg->wrench.force), tau = conv::ToVec3(msg->wrench.torque);
-  std::lock_guard<std::mutex> lock(mutex_);
-  ++received_commands_;
-  std::string error;
-  const int b = FindBodyOrFail(msg->body, true, &error);
-  if (b >= 0) CheckWrenchValues(f, tau, &error);
-  if (!error.empty()) {
-    ++dropped_commands_;
-    ROS_WARN_THROTTLE(1.0, "implicit_sim: dropped ~wrench_cmd: %s (%ld dropped so far)", error.c_str(),
-                      dropped_commands_);
-    return;
-  }
-  const int v = Model::v_offset(model_.velocity_slot[b]);
-  commanded_W_.segment<3>(v) = f;
-  commanded_W_.segment<3>(v + 3) = tau;
+  PostBetweenSteps([this, msg] {
+    const Vec3 f = conv::ToVec3(msg->wrench.force), tau = conv::ToVec3(msg->wrench.torque);
+    std::string error;
+    const int b = FindBodyOrFail(msg->body, true, &error);
+    if (b >= 0) CheckWrenchValues(f, tau, &error);
+    long dropped = 0;
+    {
+      std::lock_guard<std::mutex> lock(diag_mutex_);
+      ++diag_.received_wrench_commands;
+      if (!error.empty()) dropped = ++diag_.dropped_wrench_commands;
+    }
+    if (!error.empty()) {
+      ROS_WARN_THROTTLE(1.0, "implicit_sim: dropped ~wrench_cmd: %s (%ld dropped so far)", error.c_str(), dropped);
+      return;
+    }
+    const int v = Model::v_offset(world_->model->velocity_slot[b]);
+    world_->commanded_W.segment<3>(v) = f;
+    world_->commanded_W.segment<3>(v + 3) = tau;
+  });
 }
 
-
-bool SimNode::SetJointEffortsLocked(const std::vector<std::string>& names, const std::vector<double>& efforts,
-                                    std::string* error) {
+bool SimNode::SetJointEfforts(const std::vector<std::string>& names, const std::vector<double>& efforts,
+                              std::string* error) {
+  const Model& model = *world_->model;
   if (names.size() != efforts.size()) {
     *error = "name and effort must have the same length (" + std::to_string(names.size()) + " names, " +
              std::to_string(efforts.size()) + " efforts)";
@@ -205,8 +205,8 @@ bool SimNode::SetJointEffortsLocked(const std::vector<std::string>& names, const
   }
   std::vector<int> joints(names.size());
   for (size_t i = 0; i < names.size(); ++i) {
-    joints[i] = model_.FindJoint(names[i]);
-    if (joints[i] < 0 || !model_.joints[joints[i]].has_coordinate()) {
+    joints[i] = model.FindJoint(names[i]);
+    if (joints[i] < 0 || !model.joints[joints[i]].has_coordinate()) {
       *error = "no revolute, continuous or prismatic joint '" + names[i] + "' in the scene";
       return false;
     }
@@ -216,29 +216,35 @@ bool SimNode::SetJointEffortsLocked(const std::vector<std::string>& names, const
       return false;
     }
   }
-  for (size_t i = 0; i < names.size(); ++i) joint_efforts_[joints[i]] = efforts[i];
-  SaveLatestLocked();  // /joint_states shows the new efforts
+  for (size_t i = 0; i < names.size(); ++i) world_->joint_efforts[joints[i]] = efforts[i];
+  SaveSnapshot();  // /joint_states shows the new efforts
   return true;
 }
 
 void SimNode::OnJointEffortCommand(const sensor_msgs::JointState::ConstPtr& msg) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  ++received_joint_commands_;
-  std::string error;
-  if (!SetJointEffortsLocked(msg->name, msg->effort, &error)) {
-    ++dropped_joint_commands_;
-    ROS_WARN_THROTTLE(1.0, "implicit_sim: dropped ~joint_effort_cmd: %s (%ld dropped so far)", error.c_str(),
-                      dropped_joint_commands_);
-  }
+  PostBetweenSteps([this, msg] {
+    std::string error;
+    const bool ok = SetJointEfforts(msg->name, msg->effort, &error);
+    long dropped = 0;
+    {
+      std::lock_guard<std::mutex> lock(diag_mutex_);
+      ++diag_.received_joint_commands;
+      if (!ok) dropped = ++diag_.dropped_joint_commands;
+    }
+    if (!ok) {
+      ROS_WARN_THROTTLE(1.0, "implicit_sim: dropped ~joint_effort_cmd: %s (%ld dropped so far)", error.c_str(),
+                        dropped);
+    }
+  });
 }
 
 bool SimNode::OnSetJointEfforts(implicit_sim::SetJointEfforts::Request& req,
                                 implicit_sim::SetJointEfforts::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  std::string error;
-  res.success = SetJointEffortsLocked(req.name, req.effort, &error);
-  res.message = res.success ? "set the effort of " + std::to_string(req.name.size()) + " joints" : error;
-  return true;
+  return RunBetweenSteps([&] {
+           std::string error;
+           res.success = SetJointEfforts(req.name, req.effort, &error);
+           res.message = res.success ? "set the effort of " + std::to_string(req.name.size()) + " joints" : error;
+         }) || ShuttingDown(res);
 }
 
 }  // namespace implicit_sim

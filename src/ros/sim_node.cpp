@@ -1,6 +1,6 @@
-// The node's core: construction, the physics, publish and diagnostics threads, and stepping with the applied wrenches.
-// The physics thread holds mutex_ for a whole step and then saves the result as the latest snapshot; the publish
-// thread reads only that snapshot (under latest_mutex_), so /clock and /tf keep their rates however long a step takes.
+// The node's core: construction, the mailbox, the physics, publish and diagnostics threads, and stepping with the
+// applied wrenches. Only the physics thread touches world_; the others post commands to it (RunBetweenSteps,
+// PostBetweenSteps) or read the snapshot it saves (Latest), so no lock is held across a step.
 #include "implicit_sim/ros/sim_node.h"  // first: its generated service type Step precedes the core's function Step
 
 #include <chrono>
@@ -22,41 +22,56 @@ using WallClock = std::chrono::steady_clock;
 // How long shutdown waits for a step in progress (a step of a large pile can take seconds) before the node exits
 // without it; roslaunch escalates SIGINT to SIGTERM only after 15 s.
 constexpr double kShutdownGraceS = 2.0;
+// /clock from the physics thread: at most ~clock_rate messages per second of simulation time and at most this many
+// per second of wall time (as fast as possible, sim time runs hundreds of times faster than the wall).
+constexpr double kMaxClockWallRate = 1000.0;  // Hz
+
+double WallSeconds() { return std::chrono::duration<double>(WallClock::now().time_since_epoch()).count(); }
 
 }  // namespace
+
+SimNode::World::World(std::shared_ptr<const Model> loaded)
+    : model(std::move(loaded)), data(std::make_unique<Data>(*model)) {
+  state = initial_state = State::Initial(*model);
+  commanded_W = Eigen::VectorXd::Zero(model->nv());
+  wrench_W = Eigen::VectorXd::Zero(model->nv());
+  joint_efforts = Eigen::VectorXd::Zero(model->joints.size());
+}
 
 SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
     : nh_(nh),
       pnh_(pnh),
       params_(NodeParams::Read(pnh)),
-      model_(LoadNodeScene(nh, params_)),
       options_(params_.options),
-      data_(model_),
       diagnostics_(nh, pnh) {
-  state_ = initial_state_ = State::Initial(model_);
+  world_ = std::make_unique<World>(std::make_shared<const Model>(LoadNodeScene(nh, params_)));
+  CheckWorldFrame(*world_->model, params_.world_frame);
+  const Model& model = *world_->model;
   paused_ = params_.paused;
-  commanded_W_ = Eigen::VectorXd::Zero(model_.nv());
-  wrench_W_ = Eigen::VectorXd::Zero(model_.nv());
-  joint_efforts_ = Eigen::VectorXd::Zero(model_.joints.size());
-  SaveLatestLocked();
+  diag_.paused = paused_;
+  SaveSnapshot();
   AdvertiseTopics();
   AdvertiseServices();
-  PublishStaticTf();
-  diagnostics_.setHardwareID("implicit_sim " + model_.scene_name);
+  PublishStaticTf(model);
+  diagnostics_.setHardwareID("implicit_sim " + model.scene_name);
   diagnostics_.add("solver", this, &SimNode::UpdateDiagnostics);
-  ROS_INFO("implicit_sim: scene '%s', %d moving bodies, %zu contact pairs, h = %g s, %s", model_.scene_name.c_str(),
-           model_.num_moving(), model_.pairs.size(), options_.h, paused_ ? "paused" : "running");
+  ROS_INFO("implicit_sim: scene '%s', %d moving bodies, %zu contact pairs, h = %g s, %s", model.scene_name.c_str(),
+           model.num_moving(), model.pairs.size(), options_.h, paused_ ? "paused" : "running");
 }
 
-SimNode::~SimNode() { StopThreads(std::numeric_limits<double>::infinity()); }
+SimNode::~SimNode() {
+  if (run_steps_server_) run_steps_server_->shutdown();
+  StopThreads(std::numeric_limits<double>::infinity());
+}
 
 void SimNode::Run() {
-  ros::AsyncSpinner spinner(2);
+  ros::AsyncSpinner spinner(4);  // services wait for the physics thread: several may wait at once
   spinner.start();
   PublishClock(SimTime());
   StartThread(&physics_thread_, &SimNode::PhysicsLoop);
   StartThread(&publish_thread_, &SimNode::PublishLoop);
   StartThread(&diagnostics_thread_, &SimNode::DiagnosticsLoop);
+  run_steps_server_->start();
   ros::waitForShutdown();
   if (!StopThreads(kShutdownGraceS)) {
     // The core's step cannot be interrupted: exit without it (nothing is lost; ROS is already shut down).
@@ -65,6 +80,7 @@ void SimNode::Run() {
     std::fflush(nullptr);
     std::_Exit(0);
   }
+  run_steps_server_->shutdown();
 }
 
 void SimNode::StartThread(std::thread* thread, void (SimNode::*loop)()) {
@@ -82,9 +98,12 @@ void SimNode::StartThread(std::thread* thread, void (SimNode::*loop)()) {
 
 bool SimNode::StopThreads(double grace_s) {
   {
-    std::unique_lock<std::mutex> lock(stop_mutex_);
+    std::lock_guard<std::mutex> lock(mailbox_mutex_);  // the waiters of commands and jobs check stopping_ under it
     stopping_ = true;
-    wake_.notify_all();
+  }
+  mailbox_cv_.notify_all();
+  {
+    std::unique_lock<std::mutex> lock(stop_mutex_);
     stop_cv_.notify_all();
     const auto all_ended = [this] { return threads_ended_ == threads_started_; };
     if (std::isinf(grace_s)) {
@@ -99,81 +118,141 @@ bool SimNode::StopThreads(double grace_s) {
   return true;
 }
 
-void SimNode::ComputeWrenchesLocked() {
-  wrench_W_.setZero();
-  const double t = SimTime() + 1e-9;
-  for (int k = 0; k < model_.num_moving(); ++k) {  // ~wrench_cmd: at the link origin, world frame
-    const int b = model_.moving_bodies[k];
-    const int v = Model::v_offset(k);
-    AddWrenchAtPoint(model_, state_, b, -1, state_.X_WL(model_, b).translation(), commanded_W_.segment<3>(v),
-                     commanded_W_.segment<3>(v + 3), &wrench_W_);
-  }
-  for (const TimedWrench& w : wrenches_) {
-    if (t < w.start || (w.end >= 0.0 && t >= w.end)) continue;
-    AddWrenchAtPoint(model_, state_, w.body, w.frame_body, w.point, w.force, w.torque, &wrench_W_);
-  }
-  if (!model_.joints.empty()) AddJointEffortWrench(model_, state_, joint_efforts_, &wrench_W_);
+bool SimNode::RunBetweenSteps(std::function<void()> fn) {
+  auto command = std::make_shared<Command>();
+  command->run = std::move(fn);
+  std::unique_lock<std::mutex> lock(mailbox_mutex_);
+  if (stopping_) return false;
+  commands_.push_back(command);
+  mailbox_cv_.notify_all();
+  mailbox_cv_.wait(lock, [&] { return command->done || stopping_; });
+  return command->done;
 }
 
-void SimNode::StepLocked() {
-  ComputeWrenchesLocked();
+void SimNode::PostBetweenSteps(std::function<void()> fn) {
+  auto command = std::make_shared<Command>();
+  command->run = std::move(fn);
+  std::lock_guard<std::mutex> lock(mailbox_mutex_);
+  commands_.push_back(command);
+  mailbox_cv_.notify_all();
+}
+
+void SimNode::RunCommands() {
+  std::vector<std::shared_ptr<Command>> commands;
+  {
+    std::lock_guard<std::mutex> lock(mailbox_mutex_);
+    commands.swap(commands_);
+  }
+  if (commands.empty()) return;
+  for (const auto& command : commands) command->run();
+  {
+    std::lock_guard<std::mutex> lock(mailbox_mutex_);
+    for (const auto& command : commands) command->done = true;
+  }
+  mailbox_cv_.notify_all();
+}
+
+void SimNode::ComputeWrenches() {
+  World& w = *world_;
+  const Model& model = *w.model;
+  w.wrench_W.setZero();
+  const double t = SimTime() + 1e-9;
+  for (int k = 0; k < model.num_moving(); ++k) {  // ~wrench_cmd: at the link origin, world frame
+    const int b = model.moving_bodies[k];
+    const int v = Model::v_offset(k);
+    AddWrenchAtPoint(model, w.state, b, -1, w.state.X_WL(model, b).translation(), w.commanded_W.segment<3>(v),
+                     w.commanded_W.segment<3>(v + 3), &w.wrench_W);
+  }
+  for (const TimedWrench& tw : w.wrenches) {
+    if (t < tw.start || (tw.end >= 0.0 && t >= tw.end)) continue;
+    AddWrenchAtPoint(model, w.state, tw.body, tw.frame_body, tw.point, tw.force, tw.torque, &w.wrench_W);
+  }
+  if (!model.joints.empty()) AddJointEffortWrench(model, w.state, w.joint_efforts, &w.wrench_W);
+}
+
+void SimNode::StepOnce(double rtf) {
+  ComputeWrenches();
+  World& w = *world_;
   StepReport report;
   try {
-    report = Step(model_, options_, &state_, &data_, &wrench_W_);
+    report = Step(*w.model, options_, &w.state, w.data.get(), &w.wrench_W);
   } catch (const std::exception& e) {
     report.advanced = false;
     report.fault = StepFault::kNoFiniteSolution;
     report.fault_detail = e.what();
   }
   ++step_count_;
-  ++diag_steps_;
-  ++faults_[static_cast<int>(report.fault)];
-  if (!report.converged) ++diag_nonconverged_;
-  last_report_ = report;
+  std::string failure;
   if (report.advanced) {
-    at_initial_state_ = false;
-    SaveLatestLocked();
-    return;
-  }
-  // Step left the last good state in place (it never publishes NaN): warn once, then pause or reset.
-  ++diag_failed_;
-  last_failure_ = std::string(StepFaultName(report.fault)) + (report.fault_detail.empty() ? "" : ": ") +
-                  report.fault_detail;
-  if (params_.on_fault == "reset" && !at_initial_state_) {
-    ROS_WARN("implicit_sim: step refused (%s); bodies reset to their initial state", last_failure_.c_str());
-    ResetLocked();
+    stepped_ = true;
   } else {
-    paused_ = true;
-    ROS_ERROR("implicit_sim: step refused (%s); the simulation is paused", last_failure_.c_str());
+    // Step left the last good state in place (it never publishes NaN): warn once, then pause or reset.
+    failure = std::string(StepFaultName(report.fault)) + (report.fault_detail.empty() ? "" : ": ") +
+              report.fault_detail;
+    if (params_.on_fault == "reset" && stepped_) {
+      ROS_WARN("implicit_sim: step refused (%s); bodies reset to their initial state", failure.c_str());
+      ResetWorld();
+    } else {
+      paused_ = true;
+      ROS_ERROR("implicit_sim: step refused (%s); the simulation is paused", failure.c_str());
+    }
   }
-  SaveLatestLocked();
+  {
+    std::lock_guard<std::mutex> lock(diag_mutex_);
+    ++diag_.steps;
+    ++diag_.faults[static_cast<int>(report.fault)];
+    if (!report.converged) ++diag_.nonconverged;
+    if (!report.advanced) {
+      ++diag_.failed;
+      diag_.last_failure = failure;
+      diag_.fault_holds = paused_;
+    }
+    diag_.paused = paused_;
+    diag_.sim_time = SimTime();
+    diag_.rtf = rtf;
+    diag_.last_iterations = report.iterations;
+    diag_.last_residual = report.residual;
+  }
+  if (!report.advanced) {
+    std::lock_guard<std::mutex> lock(mailbox_mutex_);
+    job_.sim_time = SimTime();
+    if (job_.active) FinishJobLocked(false, "stopped after " + std::to_string(job_.done) + " steps: " + failure);
+  }
+  SaveSnapshot();
+  PublishClockThrottled(SimTime(), !report.advanced);
+  PublishStepStats(report, SimTime(), step_count_, rtf);
 }
 
-void SimNode::ResetLocked() {
+void SimNode::ResetWorld() {
+  World& w = *world_;
   time_offset_ = SimTime();  // simulation time keeps increasing; bodies return to their initial state
-  state_ = initial_state_;
-  ClearWarmStart(&data_);
+  w.state = w.initial_state;
+  ClearWarmStart(w.data.get());
   // No forces, but the vector keeps its size: it follows the core's pair layout (Data::LayOut), and a step whose
   // layout is unchanged writes its results into it by index (clearing it made them vanish after ~reset).
-  for (ContactResult& contact : data_.contacts) {
+  for (ContactResult& contact : w.data->contacts) {
     const int pair = contact.pair;
     contact = ContactResult();
     contact.pair = pair;
   }
-  wrenches_.clear();
-  commanded_W_.setZero();
-  joint_efforts_.setZero();
+  w.wrenches.clear();
+  w.commanded_W.setZero();
+  w.joint_efforts.setZero();
   restart_pacing_ = true;
-  at_initial_state_ = true;
-  SaveLatestLocked();
+  stepped_ = false;
+  SaveSnapshot();
 }
 
-void SimNode::SaveLatestLocked() {
+void SimNode::SaveSnapshot() {
+  const World& w = *world_;
   auto snapshot = std::make_shared<Snapshot>();
-  snapshot->state = state_;
-  snapshot->contacts = data_.contacts;
-  snapshot->efforts = joint_efforts_;
+  snapshot->model = w.model;
+  snapshot->state = w.state;
+  snapshot->contacts = w.data->contacts;
+  snapshot->efforts = w.joint_efforts;
   snapshot->sim_time = SimTime();
+  snapshot->version = ++snapshot_version_;
+  snapshot->stepped = stepped_;
   std::lock_guard<std::mutex> lock(latest_mutex_);
   latest_ = std::move(snapshot);
 }
@@ -183,22 +262,41 @@ std::shared_ptr<const SimNode::Snapshot> SimNode::Latest() const {
   return latest_;
 }
 
+void SimNode::PublishClockThrottled(double sim_time, bool force) {
+  const double wall = WallSeconds();
+  {
+    std::lock_guard<std::mutex> lock(clock_mutex_);
+    const bool due = sim_time >= last_clock_ + 1.0 / params_.clock_rate - 1e-12 &&
+                     wall >= last_clock_wall_ + 1.0 / kMaxClockWallRate;
+    if (!force && !due) return;
+    last_clock_wall_ = wall;
+  }
+  PublishClock(sim_time);
+}
+
 void SimNode::PhysicsLoop() {
-  WallClock::time_point pace_wall;
+  WallClock::time_point pace_wall, rtf_wall = WallClock::now();
   double pace_sim = 0.0, rtf_sim = 0.0;
-  WallClock::time_point rtf_wall = WallClock::now();
   while (true) {
-    std::unique_lock<std::mutex> lock(mutex_);
-    // A bounded wait: stopping_ is set without mutex_, so a notification can come between the check and the wait.
-    while (!wake_.wait_for(lock, std::chrono::milliseconds(100), [this] { return stopping_ || !paused_; })) {
+    bool run_job = false;
+    {
+      std::unique_lock<std::mutex> lock(mailbox_mutex_);
+      mailbox_cv_.wait(lock, [this] { return stopping_ || !commands_.empty() || !paused_ || JobRunnableLocked(); });
+      if (stopping_) return;
+      run_job = JobRunnableLocked();
     }
-    if (stopping_) return;
+    RunCommands();
+    if (run_job) {
+      RunJobStep();
+      continue;
+    }
+    if (paused_ || stopping_) continue;
     if (restart_pacing_) {
       pace_wall = rtf_wall = WallClock::now();
       pace_sim = rtf_sim = SimTime();
       restart_pacing_ = false;
     }
-    StepLocked();
+    StepOnce(rtf_);
     const double sim = SimTime();
     const auto now = WallClock::now();
     const double window = std::chrono::duration<double>(now - rtf_wall).count();
@@ -207,38 +305,35 @@ void SimNode::PhysicsLoop() {
       rtf_sim = sim;
       rtf_wall = now;
     }
-    const StepReport report = last_report_;
-    const uint64_t step = step_count_;
-    const double rtf = rtf_;
-    lock.unlock();
-    PublishClock(sim);
-    PublishStepStats(report, sim, step, rtf);
-    if (params_.real_time_factor > 0.0) {
+    if (params_.real_time_factor > 0.0) {  // pace, but answer commands meanwhile
       const std::chrono::duration<double> ahead((sim - pace_sim) / params_.real_time_factor);  // s of wall time
-      std::this_thread::sleep_until(pace_wall + std::chrono::duration_cast<WallClock::duration>(ahead));
+      const auto until = pace_wall + std::chrono::duration_cast<WallClock::duration>(ahead);
+      std::unique_lock<std::mutex> lock(mailbox_mutex_);
+      mailbox_cv_.wait_until(lock, until, [this] { return stopping_ || !commands_.empty(); });
     }
   }
 }
 
-// /clock, /tf and the topics at ~publish_rate (wall time) from the latest completed step; never waits for a step.
+// /clock, /tf and the topics at ~publish_rate (wall time) from the latest snapshot; never waits for a step. The
+// per-state topics are sent when the snapshot changed, so a paused simulation sends nothing again but /clock.
 void SimNode::PublishLoop() {
   PublishMemory memory;
-  memory.shapes = ros_conversions::ShapeMarkers(model_);
-  memory.on_tf.assign(model_.bodies.size(), 1);  // jointed links leave /tf to robot_state_publisher if asked
-  for (const Joint& joint : model_.joints) memory.on_tf[joint.child] = params_.publish_joint_link_tf;
   const auto period =
       std::chrono::duration_cast<WallClock::duration>(std::chrono::duration<double>(1.0 / params_.publish_rate));
   WallClock::time_point next = WallClock::now();
   while (!stopping_) {
     const std::shared_ptr<const Snapshot> latest = Latest();
     const Snapshot& snapshot = *latest;
-    const ros::Time stamp = ros::Time().fromSec(snapshot.sim_time);
+    if (memory.model != snapshot.model) {  // a new world: its shapes and static frames, stale contacts deleted
+      memory.model = snapshot.model;
+      memory.on_tf.assign(snapshot.model->bodies.size(), 1);  // jointed links: to robot_state_publisher if asked
+      for (const Joint& joint : snapshot.model->joints) memory.on_tf[joint.child] = params_.publish_joint_link_tf;
+    }
     PublishClock(snapshot.sim_time);  // every cycle, even when time has not moved (the same time again is allowed)
-    PublishTf(snapshot, stamp, &memory);  // only when time has moved
-    PublishJointStates(snapshot.state, snapshot.efforts, stamp);
-    PublishBodyStates(snapshot, stamp);
-    PublishContacts(snapshot, stamp);
-    PublishMarkers(snapshot, stamp, &memory);
+    if (snapshot.version != memory.last_version) {
+      memory.last_version = snapshot.version;
+      PublishStateTopics(snapshot, &memory);
+    }
     next += period;
     const WallClock::time_point now = WallClock::now();
     if (next < now) next = now;  // a late cycle is not made up with a burst
@@ -247,7 +342,7 @@ void SimNode::PublishLoop() {
   }
 }
 
-// /diagnostics once a second, on its own thread: UpdateDiagnostics takes mutex_ and so waits out a step in progress.
+// /diagnostics once a second, on its own thread; it reads counters only, so a step in progress never delays it.
 void SimNode::DiagnosticsLoop() {
   std::unique_lock<std::mutex> lock(stop_mutex_);
   while (!stop_cv_.wait_for(lock, std::chrono::seconds(1), [this] { return stopping_.load(); })) {

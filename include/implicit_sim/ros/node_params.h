@@ -19,6 +19,9 @@ struct NodeParams {
   StepperOptions options;         // ~time_step (h), ~tolerance, ~max_iterations, ~solver; the rest at their defaults
   double publish_rate = 30.0;     // Hz, (0, 1000]: /tf, ~body_states, ~contacts, ~markers
   double real_time_factor = 1.0;  // [0, 1000]; 0 = as fast as possible
+  // Hz of simulation time, (0, 1e6]: the physics thread sends /clock when the simulation time has moved 1 / clock_rate
+  // since the last one (at most 1000 per second of wall time); the publish thread adds one per publish cycle.
+  double clock_rate = 1000.0;
   bool paused = false;
   // What a refused step (initial overlap, divergence, no finite solution) does after the state is restored: "pause"
   // the simulation, or "reset" the bodies to their initial state and run on (pausing instead if the initial state
@@ -30,9 +33,13 @@ struct NodeParams {
   // Whether /tf carries the links that hang on joints (world -> link, like every other body). Set false to leave them
   // to robot_state_publisher fed by /joint_states (it publishes parent -> child along the URDF tree).
   bool publish_joint_link_tf = true;
-  // Reads and validates; throws std::invalid_argument naming the parameter and its range.
+  // Reads and validates; throws std::invalid_argument naming the parameter and its range, or an unknown private
+  // parameter (a misspelt name would otherwise be ignored silently).
   static NodeParams Read(const ros::NodeHandle& pnh);
 };
+
+// Throws std::invalid_argument when ~world_frame names a link of the model (tf would get world_frame -> world_frame).
+void CheckWorldFrame(const Model& model, const std::string& world_frame);
 
 // The scene the parameters name (~scene, else the robot_description parameter of nh); throws std::invalid_argument
 // naming ~scene or robot_description when there is none.

@@ -1,32 +1,37 @@
-// The ROS node over the core: steps on its own thread, publishes /clock, /tf, /tf_static, ~contacts, ~markers,
-// ~step_stats, ~body_states and /diagnostics, and serves a gazebo_ros-like control API. Three threads: physics (steps,
-// holding mutex_ for the whole step), publish (/clock, /tf and the topics at ~publish_rate from the latest completed
-// step, never taking mutex_, so a slow step never delays them) and diagnostics (once a second). doc/ros_node.md documents the
-// contract (topics, services, parameters). By concern: sim_node.cpp (construction, threads, stepping),
-// node_params.cpp (parameters), node_services.cpp (services and command topics, joints included) and
-// node_publishers.cpp (topics and diagnostics).
+// The ROS node over the core: publishes /clock, /tf, /tf_static, ~contacts, ~markers, ~step_stats, ~body_states,
+// /joint_states and /diagnostics, and serves a gazebo_ros-like control API. doc/ros_node.md documents the contract.
+//
+// Threads. The physics thread alone owns the world (model, state, data, commands) and steps it. Everything else talks
+// to it through a mailbox: a service posts a command and waits for the physics thread to run it between two steps
+// (so it answers within one step, never after a whole ~step job), a command topic posts without waiting, and the
+// publish and diagnostics threads read only the snapshot the physics thread saves after every change. No lock is
+// ever held across a step. By concern: sim_node.cpp (threads, mailbox, stepping), node_jobs.cpp (the ~step service
+// and the ~run_steps action), node_params.cpp, node_services.cpp, node_publishers.cpp.
 #pragma once
 
 #include <atomic>
-#include <chrono>
 #include <condition_variable>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include <actionlib/server/simple_action_server.h>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <Eigen/Core>
-#include <sensor_msgs/JointState.h>
 #include <ros/ros.h>
+#include <sensor_msgs/JointState.h>
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include "implicit_sim/ApplyBodyWrench.h"
 #include "implicit_sim/BodyWrench.h"
+#include "implicit_sim/Contacts.h"
 #include "implicit_sim/GetBodyState.h"
+#include "implicit_sim/RunStepsAction.h"
 #include "implicit_sim/SetBodyState.h"
 #include "implicit_sim/SetJointEfforts.h"
 #include "implicit_sim/Step.h"
@@ -45,7 +50,7 @@ class SimNode {
   // Loads the scene and sets up publishers and services; throws std::invalid_argument for a bad parameter or scene.
   SimNode(ros::NodeHandle nh, ros::NodeHandle pnh);
   ~SimNode();
-  // Starts the physics and publishing threads and blocks until ROS shuts down.
+  // Starts the physics, publishing and diagnostics threads and blocks until ROS shuts down.
   void Run();
 
  private:
@@ -56,99 +61,151 @@ class SimNode {
     double start, end;   // simulation time (s); end < 0: until cleared
   };
 
-  // The latest completed state, saved under mutex_ whenever the state changes (every step, reset, set_body_state,
-  // joint efforts) and read by the publish thread under latest_mutex_ only.
+  // What the physics thread steps. Data keeps a pointer to its model, so the model lives on the heap.
+  struct World {
+    std::shared_ptr<const Model> model;
+    State state, initial_state;
+    std::unique_ptr<Data> data;
+    std::vector<TimedWrench> wrenches;
+    Eigen::VectorXd commanded_W;    // ~wrench_cmd per moving slot (Model::v_offset): f_W (N), tau_W (N m) at the link
+                                    // origin
+    Eigen::VectorXd wrench_W;       // the wrench handed to the core (at the centre of mass; core/model/wrench.h)
+    Eigen::VectorXd joint_efforts;  // per model joint: the commanded effort (N m or N; fixed joints 0)
+    explicit World(std::shared_ptr<const Model> loaded);
+  };
+
+  // The latest state, saved by the physics thread after every change; the publish thread and the read-only services
+  // use only this. `version` grows with every saved snapshot.
   struct Snapshot {
+    std::shared_ptr<const Model> model;
     State state;
     std::vector<ContactResult> contacts;
     Eigen::VectorXd efforts;  // per model joint (N m or N)
     double sim_time = 0.0;    // s
+    uint64_t version = 0;
+    bool stepped = false;     // a step has run since startup or the last reset (contact results exist)
   };
   // What the publish thread keeps from one cycle to the next (touched by it only).
   struct PublishMemory {
-    visualization_msgs::MarkerArray shapes;  // the shape markers, built once
+    std::shared_ptr<const Model> model;      // the model the shapes below belong to
     std::vector<char> on_tf;                 // per body: whether /tf carries its link
     std::vector<int> shown_pairs, active_pairs;  // pairs with contact markers: last published, current
     double last_tf_time = -1.0;              // s, simulation time of the last /tf
+    uint64_t last_version = 0;               // snapshot version last published
+  };
+  // A ~step or ~run_steps request: steps run by the physics thread while paused. Guarded by mailbox_mutex_.
+  struct StepJob {
+    bool active = false, cancel = false, finished = false, success = false;
+    uint64_t requested = 0, done = 0;
+    double sim_time = 0.0;  // s, after the last step done
+    std::string message;
+  };
+  // Counters for /diagnostics, written by the physics thread and the command callbacks. Guarded by diag_mutex_.
+  struct DiagnosticCounters {
+    long steps = 0, nonconverged = 0, failed = 0;  // since the last report
+    long received_wrench_commands = 0, dropped_wrench_commands = 0;
+    long received_joint_commands = 0, dropped_joint_commands = 0;
+    long faults[6] = {0, 0, 0, 0, 0, 0};  // refused or non-converged steps since startup, by StepFault
+    bool paused = false;
+    bool fault_holds = false;  // a refused step paused the simulation; cleared by ~unpause, ~reset
+    std::string last_failure;
+    double sim_time = 0.0, rtf = 0.0, last_residual = 0.0;
+    long last_iterations = 0;
+  };
+  struct Command {
+    std::function<void()> run;
+    bool done = false;
   };
 
-  double SimTime() const { return time_offset_ + state_.t; }
-  // sim_node.cpp: stepping and threads.
-  void StepLocked();                 // one step with the active wrenches; mutex held
-  void ResetLocked();                // bodies back to the initial state, warm start and wrenches cleared; mutex held
-  void ComputeWrenchesLocked();      // fills wrench_W_ for the step starting now
-  void SaveLatestLocked();           // the current state as the latest snapshot; mutex held
-  std::shared_ptr<const Snapshot> Latest() const;
+  // sim_node.cpp: the mailbox and the physics thread.
+  // Runs fn on the physics thread between two steps and waits for it; false (fn not run) when the node is stopping.
+  bool RunBetweenSteps(std::function<void()> fn);
+  // Queues fn for the physics thread without waiting (command topics).
+  void PostBetweenSteps(std::function<void()> fn);
+  double SimTime() const { return time_offset_ + world_->state.t; }
   void PhysicsLoop();
+  void RunCommands();
+  bool JobRunnableLocked() const { return job_.active && !job_.cancel; }
+  void StepOnce(double rtf);             // one step with the active wrenches
+  void ResetWorld();                     // bodies back to the initial state, warm start and wrenches cleared
+  void ComputeWrenches();                // fills wrench_W for the step starting now
+  void SaveSnapshot();                   // the current state as the latest snapshot
+  std::shared_ptr<const Snapshot> Latest() const;
+  void PublishClockThrottled(double sim_time, bool force);
   void PublishLoop();
   void DiagnosticsLoop();
   // Sets stopping_, wakes every thread and joins them once all have ended within grace_s (s); false,
-  // nothing joined, when one is still inside a step (or waiting for it) by then.
+  // nothing joined, when one is still inside a step by then.
   bool StopThreads(double grace_s);
   void StartThread(std::thread* thread, void (SimNode::*loop)());
+  // node_jobs.cpp: ~step and ~run_steps.
+  bool StartJob(uint64_t steps, uint64_t max_steps, std::string* refusal);  // on the physics thread
+  void RunJobStep();                                                        // on the physics thread
+  void FinishJobLocked(bool success, const std::string& message);
+  bool OnStep(implicit_sim::Step::Request& req, implicit_sim::Step::Response& res);
+  void OnRunStepsGoal(const implicit_sim::RunStepsGoalConstPtr& goal);
   // node_publishers.cpp: one function per topic.
   void AdvertiseTopics();
   void PublishClock(double sim_time);
   void PublishStepStats(const StepReport& report, double sim_time, uint64_t step, double rtf);
-  void PublishStaticTf();
+  void PublishStaticTf(const Model& model);
   void PublishTf(const Snapshot& snapshot, const ros::Time& stamp, PublishMemory* memory);
-  void PublishBodyStates(const Snapshot& snapshot, const ros::Time& stamp);
-  void PublishContacts(const Snapshot& snapshot, const ros::Time& stamp);
-  void PublishMarkers(const Snapshot& snapshot, const ros::Time& stamp, PublishMemory* memory);
-  void PublishJointStates(const State& snapshot, const Eigen::VectorXd& efforts, const ros::Time& stamp);
+  void PublishStateTopics(const Snapshot& snapshot, PublishMemory* memory);  // after a change of the state
+  void PublishContactMarkers(const Snapshot& snapshot, PublishMemory* memory);
+  sensor_msgs::JointState JointStatesMsg(const Snapshot& snapshot) const;
+  implicit_sim::Contacts ContactsMsg(const Snapshot& snapshot) const;
+  // The current message of a per-state topic to one new subscriber.
+  void SendContacts(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to);
+  void SendBodyStates(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to);
+  void SendJointStates(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to);
+  void SendMarkers(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to);
   void UpdateDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status);
-  // node_services.cpp: services and command topics.
+  // node_services.cpp: services and command topics (run on the physics thread through the mailbox).
   void AdvertiseServices();
   int FindBodyOrFail(const std::string& name, bool must_move, std::string* error) const;
   bool OnPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
   bool OnUnpause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
   bool OnReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
   bool OnClearWrenches(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
-  bool OnStep(implicit_sim::Step::Request& req, implicit_sim::Step::Response& res);
   bool OnGetBodyState(implicit_sim::GetBodyState::Request& req, implicit_sim::GetBodyState::Response& res);
   bool OnSetBodyState(implicit_sim::SetBodyState::Request& req, implicit_sim::SetBodyState::Response& res);
   bool OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req, implicit_sim::ApplyBodyWrench::Response& res);
   void OnWrenchCommand(const implicit_sim::BodyWrench::ConstPtr& msg);
-  // Joints: ~joint_effort_cmd and ~set_joint_efforts.
-  bool SetJointEffortsLocked(const std::vector<std::string>& names, const std::vector<double>& efforts,
-                             std::string* error);  // all or nothing
+  bool SetJointEfforts(const std::vector<std::string>& names, const std::vector<double>& efforts,
+                       std::string* error);  // all or nothing; physics thread
   void OnJointEffortCommand(const sensor_msgs::JointState::ConstPtr& msg);
   bool OnSetJointEfforts(implicit_sim::SetJointEfforts::Request& req, implicit_sim::SetJointEfforts::Response& res);
 
   ros::NodeHandle nh_, pnh_;
   NodeParams params_;
-  const Model model_;
   StepperOptions options_;
 
-  // Guarded by mutex_.
-  mutable std::mutex mutex_;
-  std::condition_variable wake_;
-  State state_, initial_state_;
-  Data data_;
-  double time_offset_ = 0.0;      // simulation time = time_offset_ + state_.t (reset keeps time monotonic)
+  // Owned by the physics thread (and the constructor, before it starts).
+  std::unique_ptr<World> world_;
+  double time_offset_ = 0.0;      // simulation time = time_offset_ + state.t (reset keeps time monotonic)
   bool paused_ = false, restart_pacing_ = true;
   uint64_t step_count_ = 0;
-  StepReport last_report_;
-  std::vector<TimedWrench> wrenches_;
-  Eigen::VectorXd commanded_W_;   // ~wrench_cmd, per moving slot (Model::v_offset): f_W (N), tau_W (N m) at the link
-                                  // origin
-  Eigen::VectorXd wrench_W_;      // the wrench vector handed to the core (at the centre of mass; core/model/wrench.h)
-  Eigen::VectorXd joint_efforts_;  // per model joint: the commanded effort (N m or N; fixed joints 0)
-  long received_joint_commands_ = 0, dropped_joint_commands_ = 0;
-  long diag_steps_ = 0, diag_nonconverged_ = 0, diag_failed_ = 0, dropped_commands_ = 0, received_commands_ = 0;
-  long faults_[6] = {0, 0, 0, 0, 0, 0};  // refused or non-converged steps since startup, by StepFault
-  bool at_initial_state_ = true;      // no step taken since startup or the last reset
+  uint64_t snapshot_version_ = 0;
+  bool stepped_ = false;          // a step has run since startup or the last reset
   double rtf_ = 0.0;
-  std::string last_failure_;
+
+  // The mailbox: commands for the physics thread, and the step job.
+  std::mutex mailbox_mutex_;
+  std::condition_variable mailbox_cv_;  // wakes the physics thread and the waiters of commands and jobs
+  std::vector<std::shared_ptr<Command>> commands_;
+  StepJob job_;
+
+  std::mutex diag_mutex_;
+  DiagnosticCounters diag_;
 
   std::mutex clock_mutex_;
-  double last_clock_ = -1.0;
+  double last_clock_ = -1.0;                 // s of sim time, the latest /clock
+  double last_clock_wall_ = -1.0;            // s of wall time (steady clock) of the latest throttled /clock
 
   mutable std::mutex latest_mutex_;
   std::shared_ptr<const Snapshot> latest_;  // guarded by latest_mutex_
 
-  // Every thread ends: the physics thread after the step in progress (StopThreads does not take mutex_, which a
-  // step holds), the others at once.
+  // Every thread ends: the physics thread after the step in progress, the others at once.
   std::atomic<bool> stopping_{false};
   std::mutex stop_mutex_;
   std::condition_variable stop_cv_;    // wakes the publish and diagnostics threads' waits, and StopThreads
@@ -159,6 +216,7 @@ class SimNode {
   ros::Subscriber wrench_sub_, joint_effort_sub_;
   tf2_ros::StaticTransformBroadcaster static_broadcaster_;
   diagnostic_updater::Updater diagnostics_;
+  std::unique_ptr<actionlib::SimpleActionServer<implicit_sim::RunStepsAction>> run_steps_server_;
   std::thread physics_thread_, publish_thread_, diagnostics_thread_;
 };
 
