@@ -11,7 +11,9 @@ APT_PACKAGES="build-essential cmake pkg-config googletest libgtest-dev catkin li
   libros-rosgraph-msgs-dev ros-message-generation ros-message-runtime librostest-dev python3-rostest
   libeigen3-dev coinor-libipopt-dev libsuitesparse-dev liburdfdom-dev libtinyxml2-dev libdiagnostic-updater-dev python3-rosbag python3-matplotlib locales
   parallel python3-yaml python3-rospy python3-geometry-msgs python3-sensor-msgs python3-tf2-msgs python3-visualization-msgs
-  python3-diagnostic-msgs python3-rostopic"
+  python3-diagnostic-msgs python3-rostopic
+  libactionlib-dev libactionlib-msgs-dev ros-actionlib-msgs python3-actionlib python3-actionlib-msgs
+  python3-std-srvs ros-std-srvs python3-rosservice python3-rosnode python3-roslaunch rosbash gdb valgrind"
 
 install_packages() {
   local missing=""
