@@ -13,7 +13,8 @@ APT_PACKAGES="build-essential cmake pkg-config googletest libgtest-dev catkin li
   parallel python3-yaml python3-rospy python3-geometry-msgs python3-sensor-msgs python3-tf2-msgs python3-visualization-msgs
   python3-diagnostic-msgs python3-rostopic
   libactionlib-dev libactionlib-msgs-dev ros-actionlib-msgs python3-actionlib python3-actionlib-msgs
-  python3-std-srvs ros-std-srvs python3-rosservice python3-rosnode python3-roslaunch rosbash gdb valgrind"
+  python3-std-srvs ros-std-srvs python3-rosservice python3-rosnode python3-roslaunch rosbash gdb valgrind
+  libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure"
 
 install_packages() {
   local missing=""

@@ -22,13 +22,6 @@ T ReadParam(const ros::NodeHandle& pnh, const std::string& name, T fallback) {
   return value;
 }
 
-void CheckRange(const std::string& name, double value, double lo, double hi, bool lo_open, const std::string& unit) {
-  const bool ok = std::isfinite(value) && (lo_open ? value > lo : value >= lo) && value <= hi;
-  if (!ok) {
-    throw std::invalid_argument("parameter ~" + name + " = " + FormatNumber(value) + " is out of range " +
-                                (lo_open ? "(" : "[") + FormatNumber(lo) + ", " + FormatNumber(hi) + "] " + unit);
-  }
-}
 
 // The solver parameters, through the options table: a number is read as a double (an integer parameter given as a
 // double must be whole: roscpp's int reading would round 1.5 to 2), a choice as a string.
@@ -50,10 +43,7 @@ void ReadOptionParams(const ros::NodeHandle& pnh, StepperOptions* options) {
 }
 
 // The node's own private parameters besides the options table's.
-const char* const kNodeParams[] = {"scene",         "scenes_dir",        "publish_rate",
-                                   "real_time_factor", "paused",          "on_fault",
-                                   "world_frame",   "force_marker_scale", "contact_marker_size",
-                                   "publish_joint_link_tf", "clock_rate"};
+const char* const kNodeParams[] = {"scene", "scenes_dir", "paused", "on_fault", "world_frame", "publish_joint_link_tf"};
 
 void RefuseUnknownParams(const ros::NodeHandle& pnh) {
   std::vector<std::string> names;
@@ -63,6 +53,7 @@ void RefuseUnknownParams(const ros::NodeHandle& pnh) {
   for (const OptionRow& row : OptionTable()) {
     if (*row.ros_param != '\0') known.insert(row.ros_param);
   }
+  for (const LiveParamRange& range : LiveParamRanges()) known.insert(range.name);
   for (const std::string& name : names) {
     if (name.compare(0, prefix.size(), prefix) != 0) continue;
     const std::string own = name.substr(prefix.size());
@@ -75,29 +66,45 @@ void RefuseUnknownParams(const ros::NodeHandle& pnh) {
 
 }  // namespace
 
+const std::vector<LiveParamRange>& LiveParamRanges() {
+  static const std::vector<LiveParamRange> ranges = {
+      {"real_time_factor", 0.0, 1000.0, false, "(0: as fast as possible)", &LiveParams::real_time_factor},
+      {"publish_rate", 0.0, 1000.0, true, "Hz", &LiveParams::publish_rate},
+      {"clock_rate", 0.0, 1e6, true, "Hz of simulation time", &LiveParams::clock_rate},
+      {"force_marker_scale", 0.0, 100.0, true, "m/N", &LiveParams::force_marker_scale},
+      {"contact_marker_size", 0.0, 100.0, true, "m", &LiveParams::contact_marker_size},
+      {"drive_stiffness", 0.0, 1e12, false, "N m/rad or N/m", &LiveParams::drive_stiffness},
+      {"drive_damping", 0.0, 1e12, false, "N m s/rad or N s/m", &LiveParams::drive_damping},
+      {"drag_frequency", 0.0, 100.0, true, "Hz", &LiveParams::drag_frequency}};
+  return ranges;
+}
+
+std::string CheckLiveParam(const LiveParamRange& r, double value) {
+  const bool ok = std::isfinite(value) && (r.lo_open ? value > r.lo : value >= r.lo) && value <= r.hi;
+  if (ok) return "";
+  return std::string("parameter ~") + r.name + " = " + FormatNumber(value) + " is out of range " +
+         (r.lo_open ? "(" : "[") + FormatNumber(r.lo) + ", " + FormatNumber(r.hi) + "] " + r.unit;
+}
+
 NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
   RefuseUnknownParams(pnh);
   NodeParams p;
   p.scene = ReadParam<std::string>(pnh, "scene", "");
   p.scenes_dir = ReadParam<std::string>(pnh, "scenes_dir", IMPLICIT_SIM_SCENES_DIR);
   ReadOptionParams(pnh, &p.options);
-  p.publish_rate = ReadParam(pnh, "publish_rate", p.publish_rate);
-  p.real_time_factor = ReadParam(pnh, "real_time_factor", p.real_time_factor);
-  p.clock_rate = ReadParam(pnh, "clock_rate", p.clock_rate);
+  for (const LiveParamRange& range : LiveParamRanges()) {
+    double& value = p.live.*range.field;
+    value = ReadParam(pnh, range.name, value);
+    const std::string error = CheckLiveParam(range, value);
+    if (!error.empty()) throw std::invalid_argument(error);
+  }
   p.paused = ReadParam(pnh, "paused", p.paused);
   p.on_fault = ReadParam(pnh, "on_fault", p.on_fault);
   if (p.on_fault != "pause" && p.on_fault != "reset") {
     throw std::invalid_argument("parameter ~on_fault = '" + p.on_fault + "' must be pause or reset");
   }
   p.world_frame = ReadParam(pnh, "world_frame", p.world_frame);
-  p.force_marker_scale = ReadParam(pnh, "force_marker_scale", p.force_marker_scale);
-  p.contact_marker_size = ReadParam(pnh, "contact_marker_size", p.contact_marker_size);
   p.publish_joint_link_tf = ReadParam(pnh, "publish_joint_link_tf", p.publish_joint_link_tf);
-  CheckRange("publish_rate", p.publish_rate, 0.0, 1000.0, true, "Hz");
-  CheckRange("real_time_factor", p.real_time_factor, 0.0, 1000.0, false, "(0: as fast as possible)");
-  CheckRange("clock_rate", p.clock_rate, 0.0, 1e6, true, "Hz of simulation time");
-  CheckRange("force_marker_scale", p.force_marker_scale, 0.0, 100.0, true, "m/N");
-  CheckRange("contact_marker_size", p.contact_marker_size, 0.0, 100.0, true, "m");
   if (p.world_frame.empty()) throw std::invalid_argument("parameter ~world_frame must not be empty");
   std::string error;
   if (!p.options.IsValid(&error)) throw std::invalid_argument(error);

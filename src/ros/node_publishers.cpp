@@ -62,10 +62,11 @@ void SimNode::SendJointStates(const Snapshot& snapshot, const ros::SingleSubscri
 
 void SimNode::SendMarkers(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to) {
   visualization_msgs::MarkerArray msg = conv::ShapeMarkers(*snapshot.model);
+  const LiveParams live = Live();
   for (const ContactResult& contact : snapshot.contacts) {
     if (!snapshot.stepped || !conv::IsActiveContact(contact, options_.contact_threshold)) continue;
-    conv::AppendContactMarkers(contact.pair, contact, true, params_.world_frame, params_.force_marker_scale,
-                               params_.contact_marker_size, &msg);
+    conv::AppendContactMarkers(contact.pair, contact, true, params_.world_frame, live.force_marker_scale,
+                               live.contact_marker_size, &msg);
   }
   to.publish(msg);
 }
@@ -136,20 +137,21 @@ void SimNode::PublishStateTopics(const Snapshot& snapshot, PublishMemory* memory
 
 void SimNode::PublishContactMarkers(const Snapshot& snapshot, PublishMemory* memory) {
   if (markers_pub_.getNumSubscribers() == 0) return;
+  const LiveParams live = Live();
   visualization_msgs::MarkerArray msg;
   std::vector<int>& active = memory->active_pairs;
   active.clear();
   for (const ContactResult& contact : snapshot.contacts) {
     if (!snapshot.stepped || !conv::IsActiveContact(contact, options_.contact_threshold)) continue;
-    conv::AppendContactMarkers(contact.pair, contact, true, params_.world_frame, params_.force_marker_scale,
-                               params_.contact_marker_size, &msg);
+    conv::AppendContactMarkers(contact.pair, contact, true, params_.world_frame, live.force_marker_scale,
+                               live.contact_marker_size, &msg);
     active.push_back(contact.pair);
   }
   std::sort(active.begin(), active.end());
   for (int pair : memory->shown_pairs) {  // contacts that ended (or left the NCP): delete their markers
     if (std::binary_search(active.begin(), active.end(), pair)) continue;
-    conv::AppendContactMarkers(pair, ContactResult(), false, params_.world_frame, params_.force_marker_scale,
-                               params_.contact_marker_size, &msg);
+    conv::AppendContactMarkers(pair, ContactResult(), false, params_.world_frame, live.force_marker_scale,
+                               live.contact_marker_size, &msg);
   }
   memory->shown_pairs.swap(active);
   if (!msg.markers.empty()) markers_pub_.publish(msg);

@@ -43,6 +43,8 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
       pnh_(pnh),
       params_(NodeParams::Read(pnh)),
       options_(params_.options),
+      live_(params_.live),
+      live_options_(params_.options),
       diagnostics_(nh, pnh) {
   world_ = std::make_unique<World>(std::make_shared<const Model>(LoadNodeScene(nh, params_)));
   CheckWorldFrame(*world_->model, params_.world_frame);
@@ -53,6 +55,7 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   AdvertiseTopics();
   AdvertiseServices();
   PublishStaticTf(model);
+  SetUpReconfigure();
   diagnostics_.setHardwareID("implicit_sim " + model.scene_name);
   diagnostics_.add("solver", this, &SimNode::UpdateDiagnostics);
   ROS_INFO("implicit_sim: scene '%s', %d moving bodies, %zu contact pairs, h = %g s, %s", model.scene_name.c_str(),
@@ -171,6 +174,11 @@ void SimNode::ComputeWrenches() {
 }
 
 void SimNode::StepOnce(double rtf) {
+  {
+    std::lock_guard<std::mutex> lock(live_mutex_);
+    options_.newton.tolerance = live_options_.newton.tolerance;
+    options_.newton.max_iterations = live_options_.newton.max_iterations;
+  }
   ComputeWrenches();
   World& w = *world_;
   StepReport report;
@@ -266,7 +274,7 @@ void SimNode::PublishClockThrottled(double sim_time, bool force) {
   const double wall = WallSeconds();
   {
     std::lock_guard<std::mutex> lock(clock_mutex_);
-    const bool due = sim_time >= last_clock_ + 1.0 / params_.clock_rate - 1e-12 &&
+    const bool due = sim_time >= last_clock_ + 1.0 / Live().clock_rate - 1e-12 &&
                      wall >= last_clock_wall_ + 1.0 / kMaxClockWallRate;
     if (!force && !due) return;
     last_clock_wall_ = wall;
@@ -276,7 +284,7 @@ void SimNode::PublishClockThrottled(double sim_time, bool force) {
 
 void SimNode::PhysicsLoop() {
   WallClock::time_point pace_wall, rtf_wall = WallClock::now();
-  double pace_sim = 0.0, rtf_sim = 0.0;
+  double pace_sim = 0.0, rtf_sim = 0.0, pace_factor = -1.0;
   while (true) {
     bool run_job = false;
     {
@@ -305,8 +313,14 @@ void SimNode::PhysicsLoop() {
       rtf_sim = sim;
       rtf_wall = now;
     }
-    if (params_.real_time_factor > 0.0) {  // pace, but answer commands meanwhile
-      const std::chrono::duration<double> ahead((sim - pace_sim) / params_.real_time_factor);  // s of wall time
+    const double real_time_factor = Live().real_time_factor;
+    if (real_time_factor != pace_factor) {  // a new factor paces from now on
+      pace_factor = real_time_factor;
+      pace_wall = now;
+      pace_sim = sim;
+    }
+    if (real_time_factor > 0.0) {  // pace, but answer commands meanwhile
+      const std::chrono::duration<double> ahead((sim - pace_sim) / real_time_factor);  // s of wall time
       const auto until = pace_wall + std::chrono::duration_cast<WallClock::duration>(ahead);
       std::unique_lock<std::mutex> lock(mailbox_mutex_);
       mailbox_cv_.wait_until(lock, until, [this] { return stopping_ || !commands_.empty(); });
@@ -318,10 +332,10 @@ void SimNode::PhysicsLoop() {
 // per-state topics are sent when the snapshot changed, so a paused simulation sends nothing again but /clock.
 void SimNode::PublishLoop() {
   PublishMemory memory;
-  const auto period =
-      std::chrono::duration_cast<WallClock::duration>(std::chrono::duration<double>(1.0 / params_.publish_rate));
   WallClock::time_point next = WallClock::now();
   while (!stopping_) {
+    const auto period =
+        std::chrono::duration_cast<WallClock::duration>(std::chrono::duration<double>(1.0 / Live().publish_rate));
     const std::shared_ptr<const Snapshot> latest = Latest();
     const Snapshot& snapshot = *latest;
     if (memory.model != snapshot.model) {  // a new world: its shapes and static frames, stale contacts deleted

@@ -6,7 +6,8 @@ scenes/cube_drop.urdf, real time, publish_rate 30 Hz, no /use_sim_time so the ti
 - a bag of the resting cube holds at most 1/20 of the bytes per second it did before shapes were sent once;
 - during a ~run_steps goal of 1e6 steps, services, /clock and feedback stay responsive; the goal cancels within 1 s;
 - /diagnostics stays ERROR while a refused step holds the simulation, and OK again after ~reset;
-- SIGINT stops a second node within 2 s while it runs a 1e6-step goal."""
+- SIGINT stops a second node within 2 s while it runs a 1e6-step goal;
+- dynamic_reconfigure applies good values at once and refuses NaN, Inf and out-of-range ones, keeping the previous."""
 import os
 import signal
 import subprocess
@@ -16,6 +17,7 @@ import time
 import unittest
 
 import actionlib
+import dynamic_reconfigure.client
 import rosbag
 import rosgraph
 import rospy
@@ -140,6 +142,9 @@ class NodeContract(unittest.TestCase):
             size_end, wall_end = self.bag_size(bag), time.monotonic()
             os.killpg(recorder.pid, signal.SIGINT)
             recorder.wait(timeout=20)
+            deadline = time.monotonic() + 15.0  # the wrapper can exit before its recorder renamed <bag>.active
+            while not os.path.exists(bag) and time.monotonic() < deadline:
+                time.sleep(0.1)
             rate = (size_end - size_start) / (wall_end - wall_start)
             with rosbag.Bag(bag) as b:
                 counts = {t: i.message_count for t, i in b.get_type_and_topic_info().topics.items()}
@@ -210,6 +215,30 @@ class NodeContract(unittest.TestCase):
         self.assertTrue(call("reset", Trigger).success)
         time.sleep(1.2)
         self.assertEqual(rospy.wait_for_message("/diagnostics", DiagnosticArray, timeout=5).status[0].level, 0)
+
+    def test_7_dynamic_reconfigure_applies_good_values_and_refuses_bad_ones(self):
+        client = dynamic_reconfigure.client.Client(NODE, timeout=10)
+        before = client.get_configuration(timeout=5)
+        self.assertEqual(before["publish_rate"], 30.0)
+        for name, bad in [("real_time_factor", float("nan")), ("publish_rate", 5000.0), ("clock_rate", float("inf")),
+                          ("tolerance", 0.5), ("max_iterations", 0), ("drag_frequency", -1.0),
+                          ("force_marker_scale", float("-inf"))]:
+            answer = client.update_configuration({name: bad})
+            self.assertEqual(answer[name], before[name], name)  # refused: the previous value is kept
+        answer = client.update_configuration({"publish_rate": 10.0, "tolerance": 1e-10, "max_iterations": 50})
+        self.assertEqual((answer["publish_rate"], answer["tolerance"], answer["max_iterations"]), (10.0, 1e-10, 50))
+        self.assertTrue(call("unpause", Trigger).success)
+        tf = Recorder("/tf", TFMessage)
+        time.sleep(0.5)
+        start = time.monotonic()
+        time.sleep(3.0)
+        tf_hz = len(tf.since(start)) / 3.0
+        tf.close()
+        print("[ INFO ] /tf at publish_rate 10 Hz set live: %.1f Hz" % tf_hz, flush=True)
+        self.assertGreaterEqual(tf_hz, 8.0)
+        self.assertLessEqual(tf_hz, 12.0)
+        client.update_configuration({"publish_rate": 30.0, "tolerance": before["tolerance"],
+                                     "max_iterations": before["max_iterations"]})
 
     def test_6_sigint_stops_a_node_within_2_s_in_the_middle_of_a_long_goal(self):
         name = "/sigint_goal_node"

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <ros/ros.h>
 
@@ -12,24 +13,46 @@
 
 namespace implicit_sim {
 
+// The parameters that can change while the node runs (dynamic_reconfigure, cfg/SimNode.cfg; the solver's tolerance
+// and max_iterations too, through the options). Each has a range (LiveParamRanges) checked at startup and on every
+// change.
+struct LiveParams {
+  double real_time_factor = 1.0;  // [0, 1000]; 0 = as fast as possible
+  double publish_rate = 30.0;     // Hz of wall time, (0, 1000]: /tf and the per-state topics
+  // Hz of simulation time, (0, 1e6]: the physics thread sends /clock when the simulation time has moved 1 / clock_rate
+  // since the last one (at most 1000 per second of wall time); the publish thread adds one per publish cycle.
+  double clock_rate = 1000.0;
+  double force_marker_scale = 0.05;   // m/N, (0, 100]: length of a contact force arrow per newton
+  double contact_marker_size = 0.05;  // m, (0, 100]: diameter of a contact point (arrows scale with it)
+  double drive_stiffness = 0.0;   // [0, 1e12] N m/rad or N/m: gains of a ~joint_command that gives none
+  double drive_damping = 0.0;     // [0, 1e12] N m s/rad or N s/m
+  double drag_frequency = 2.0;    // Hz, (0, 100]: natural frequency of the interactive markers' drag spring
+};
+
+// One row per live parameter: its name, range and unit, and where it lives in LiveParams.
+struct LiveParamRange {
+  const char* name;
+  double lo, hi;
+  bool lo_open;
+  const char* unit;
+  double LiveParams::*field;
+};
+const std::vector<LiveParamRange>& LiveParamRanges();
+// "" when value is finite and in range; otherwise the refusal, naming the parameter and its range.
+std::string CheckLiveParam(const LiveParamRange& range, double value);
+
 struct NodeParams {
   // Scene file path, or a name resolved as <scenes_dir>/<name>.urdf; "" -> the robot_description parameter.
   std::string scene;
   std::string scenes_dir;         // where scene names are looked up
-  StepperOptions options;         // ~time_step (h), ~tolerance, ~max_iterations, ~solver; the rest at their defaults
-  double publish_rate = 30.0;     // Hz, (0, 1000]: /tf, ~body_states, ~contacts, ~markers
-  double real_time_factor = 1.0;  // [0, 1000]; 0 = as fast as possible
-  // Hz of simulation time, (0, 1e6]: the physics thread sends /clock when the simulation time has moved 1 / clock_rate
-  // since the last one (at most 1000 per second of wall time); the publish thread adds one per publish cycle.
-  double clock_rate = 1000.0;
+  StepperOptions options;         // ~time_step (h), ~scheme, ~tolerance, ~max_iterations, ~solver, ~threads
+  LiveParams live;
   bool paused = false;
   // What a refused step (initial overlap, divergence, no finite solution) does after the state is restored: "pause"
   // the simulation, or "reset" the bodies to their initial state and run on (pausing instead if the initial state
   // itself is refused).
   std::string on_fault = "pause";
   std::string world_frame = "world";
-  double force_marker_scale = 0.05;  // m/N, (0, 100]: length of a contact force arrow per newton
-  double contact_marker_size = 0.05;  // m, (0, 100]: diameter of a contact point (arrows scale with it)
   // Whether /tf carries the links that hang on joints (world -> link, like every other body). Set false to leave them
   // to robot_state_publisher fed by /joint_states (it publishes parent -> child along the URDF tree).
   bool publish_joint_link_tf = true;

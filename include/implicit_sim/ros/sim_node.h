@@ -20,6 +20,7 @@
 
 #include <actionlib/server/simple_action_server.h>
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <dynamic_reconfigure/server.h>
 #include <Eigen/Core>
 #include <ros/ros.h>
 #include <sensor_msgs/JointState.h>
@@ -34,6 +35,7 @@
 #include "implicit_sim/RunStepsAction.h"
 #include "implicit_sim/SetBodyState.h"
 #include "implicit_sim/SetJointEfforts.h"
+#include "implicit_sim/SimNodeConfig.h"
 #include "implicit_sim/Step.h"
 #include "implicit_sim/core/model/model.h"
 #include "implicit_sim/core/step/time_stepper.h"
@@ -144,6 +146,10 @@ class SimNode {
   void FinishJobLocked(bool success, const std::string& message);
   bool OnStep(implicit_sim::Step::Request& req, implicit_sim::Step::Response& res);
   void OnRunStepsGoal(const implicit_sim::RunStepsGoalConstPtr& goal);
+  // node_reconfigure.cpp: live tuning.
+  LiveParams Live() const;
+  void SetUpReconfigure();
+  void OnReconfigure(SimNodeConfig& next);
   // node_publishers.cpp: one function per topic.
   void AdvertiseTopics();
   void PublishClock(double sim_time);
@@ -178,7 +184,7 @@ class SimNode {
 
   ros::NodeHandle nh_, pnh_;
   NodeParams params_;
-  StepperOptions options_;
+  StepperOptions options_;  // physics thread
 
   // Owned by the physics thread (and the constructor, before it starts).
   std::unique_ptr<World> world_;
@@ -194,6 +200,14 @@ class SimNode {
   std::condition_variable mailbox_cv_;  // wakes the physics thread and the waiters of commands and jobs
   std::vector<std::shared_ptr<Command>> commands_;
   StepJob job_;
+
+  // The live parameters and the solver options they change (tolerance, max_iterations), set by dynamic_reconfigure;
+  // the physics thread copies live_options_ into options_ before each step.
+  mutable std::mutex live_mutex_;
+  LiveParams live_;
+  StepperOptions live_options_;
+  boost::recursive_mutex reconfigure_mutex_;
+  std::unique_ptr<dynamic_reconfigure::Server<SimNodeConfig>> reconfigure_;
 
   std::mutex diag_mutex_;
   DiagnosticCounters diag_;
