@@ -14,7 +14,8 @@ APT_PACKAGES="build-essential cmake pkg-config googletest libgtest-dev catkin li
   python3-diagnostic-msgs python3-rostopic
   libactionlib-dev libactionlib-msgs-dev ros-actionlib-msgs python3-actionlib python3-actionlib-msgs
   python3-std-srvs ros-std-srvs python3-rosservice python3-rosnode python3-roslaunch rosbash gdb valgrind
-  libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure"
+  libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
+  libinteractive-markers-dev python3-interactive-markers"
 
 install_packages() {
   local missing=""

@@ -20,14 +20,6 @@ std_msgs::ColorRGBA Color(float r, float g, float b, float a) {
   return c;
 }
 
-geometry_msgs::Point ToPointMsg(const Vec3& p) {
-  geometry_msgs::Point m;
-  m.x = p.x();
-  m.y = p.y();
-  m.z = p.z();
-  return m;
-}
-
 geometry_msgs::Vector3 ToVectorMsg(const Vec3& v) {
   geometry_msgs::Vector3 m;
   m.x = v.x();
@@ -74,6 +66,14 @@ void RayCastMesh(const ConvexShape& shape, visualization_msgs::Marker* marker) {
 }
 
 }  // namespace
+
+geometry_msgs::Point ToPointMsg(const Vec3& p) {
+  geometry_msgs::Point m;
+  m.x = p.x();
+  m.y = p.y();
+  m.z = p.z();
+  return m;
+}
 
 geometry_msgs::Pose ToPoseMsg(const Pose& X) {
   geometry_msgs::Pose m;

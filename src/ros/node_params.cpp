@@ -43,7 +43,8 @@ void ReadOptionParams(const ros::NodeHandle& pnh, StepperOptions* options) {
 }
 
 // The node's own private parameters besides the options table's.
-const char* const kNodeParams[] = {"scene", "scenes_dir", "paused", "on_fault", "world_frame", "publish_joint_link_tf"};
+const char* const kNodeParams[] = {"scene", "scenes_dir", "paused", "on_fault", "world_frame", "publish_joint_link_tf",
+                                   "interactive_markers"};
 
 void RefuseUnknownParams(const ros::NodeHandle& pnh) {
   std::vector<std::string> names;
@@ -105,6 +106,7 @@ NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
   }
   p.world_frame = ReadParam(pnh, "world_frame", p.world_frame);
   p.publish_joint_link_tf = ReadParam(pnh, "publish_joint_link_tf", p.publish_joint_link_tf);
+  p.interactive_markers = ReadParam(pnh, "interactive_markers", p.interactive_markers);
   if (p.world_frame.empty()) throw std::invalid_argument("parameter ~world_frame must not be empty");
   std::string error;
   if (!p.options.IsValid(&error)) throw std::invalid_argument(error);

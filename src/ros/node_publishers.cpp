@@ -60,6 +60,31 @@ void SimNode::SendJointStates(const Snapshot& snapshot, const ros::SingleSubscri
   if (!msg.name.empty()) to.publish(msg);
 }
 
+// Arrows of the drag springs (ns "drag", ids 0 ... n-1; the ids from n to shown - 1 are deleted).
+void SimNode::AppendDragArrows(const Snapshot& snapshot, int shown, double size,
+                               visualization_msgs::MarkerArray* msg) const {
+  const int n = static_cast<int>(snapshot.drag_arrows.size());
+  for (int i = 0; i < std::max(n, shown); ++i) {
+    visualization_msgs::Marker m;
+    m.header.frame_id = params_.world_frame;
+    m.ns = "drag";
+    m.id = i;
+    m.pose.orientation.w = 1.0;
+    if (i >= n) {
+      m.action = visualization_msgs::Marker::DELETE;
+    } else {
+      m.action = visualization_msgs::Marker::ADD;
+      m.type = visualization_msgs::Marker::ARROW;
+      m.points.resize(2);
+      m.points[0] = conv::ToPointMsg(snapshot.drag_arrows[i].first);
+      m.points[1] = conv::ToPointMsg(snapshot.drag_arrows[i].second);
+      m.scale.x = 0.3 * size, m.scale.y = 0.6 * size, m.scale.z = 0.6 * size;
+      m.color.r = 0.2f, m.color.g = 0.6f, m.color.b = 1.0f, m.color.a = 1.0f;
+    }
+    msg->markers.push_back(m);
+  }
+}
+
 void SimNode::SendMarkers(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to) {
   visualization_msgs::MarkerArray msg = conv::ShapeMarkers(*snapshot.model);
   const LiveParams live = Live();
@@ -154,6 +179,8 @@ void SimNode::PublishContactMarkers(const Snapshot& snapshot, PublishMemory* mem
                                live.contact_marker_size, &msg);
   }
   memory->shown_pairs.swap(active);
+  AppendDragArrows(snapshot, memory->shown_drag_arrows, live.contact_marker_size, &msg);
+  memory->shown_drag_arrows = static_cast<int>(snapshot.drag_arrows.size());
   if (!msg.markers.empty()) markers_pub_.publish(msg);
 }
 

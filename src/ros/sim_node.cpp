@@ -56,6 +56,7 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   AdvertiseServices();
   PublishStaticTf(model);
   SetUpReconfigure();
+  SetUpDragMarkers(model, world_->state);
   diagnostics_.setHardwareID("implicit_sim " + model.scene_name);
   diagnostics_.add("solver", this, &SimNode::UpdateDiagnostics);
   ROS_INFO("implicit_sim: scene '%s', %d moving bodies, %zu contact pairs, h = %g s, %s", model.scene_name.c_str(),
@@ -65,6 +66,7 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
 SimNode::~SimNode() {
   if (run_steps_server_) run_steps_server_->shutdown();
   StopThreads(std::numeric_limits<double>::infinity());
+  drag_server_.reset();
 }
 
 void SimNode::Run() {
@@ -171,6 +173,7 @@ void SimNode::ComputeWrenches() {
     AddWrenchAtPoint(model, w.state, tw.body, tw.frame_body, tw.point, tw.force, tw.torque, &w.wrench_W);
   }
   if (!model.joints.empty()) AddJointEffortWrench(model, w.state, w.joint_efforts, &w.wrench_W);
+  AddDragWrenches();
 }
 
 void SimNode::StepOnce(double rtf) {
@@ -261,6 +264,9 @@ void SimNode::SaveSnapshot() {
   snapshot->sim_time = SimTime();
   snapshot->version = ++snapshot_version_;
   snapshot->stepped = stepped_;
+  for (const DragSpring& drag : w.drags) {
+    snapshot->drag_arrows.emplace_back(w.state.X_WL(*w.model, drag.body) * drag.p_LG, drag.target_W);
+  }
   std::lock_guard<std::mutex> lock(latest_mutex_);
   latest_ = std::move(snapshot);
 }
@@ -348,6 +354,7 @@ void SimNode::PublishLoop() {
       memory.last_version = snapshot.version;
       PublishStateTopics(snapshot, &memory);
     }
+    UpdateDragMarkers(snapshot, &memory);
     next += period;
     const WallClock::time_point now = WallClock::now();
     if (next < now) next = now;  // a late cycle is not made up with a burst

@@ -28,6 +28,7 @@ struct StepReport;  // core/step/time_stepper.h
 namespace ros_conversions {
 
 geometry_msgs::Pose ToPoseMsg(const Pose& X);
+geometry_msgs::Point ToPointMsg(const Vec3& p);
 geometry_msgs::Transform ToTransformMsg(const Pose& X);
 Vec3 ToVec3(const geometry_msgs::Vector3& v);
 Vec3 ToVec3(const geometry_msgs::Point& p);

@@ -56,6 +56,7 @@ struct NodeParams {
   // Whether /tf carries the links that hang on joints (world -> link, like every other body). Set false to leave them
   // to robot_state_publisher fed by /joint_states (it publishes parent -> child along the URDF tree).
   bool publish_joint_link_tf = true;
+  bool interactive_markers = true;  // an interactive marker per moving body (~drag) that pushes it with the mouse
   // Reads and validates; throws std::invalid_argument naming the parameter and its range, or an unknown private
   // parameter (a misspelt name would otherwise be ignored silently).
   static NodeParams Read(const ros::NodeHandle& pnh);

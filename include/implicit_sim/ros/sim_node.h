@@ -12,6 +12,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <functional>
+#include <set>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -22,6 +23,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <Eigen/Core>
+#include <interactive_markers/interactive_marker_server.h>
 #include <ros/ros.h>
 #include <sensor_msgs/JointState.h>
 #include <std_srvs/Trigger.h>
@@ -63,6 +65,14 @@ class SimNode {
     double start, end;   // simulation time (s); end < 0: until cleared
   };
 
+  // A mouse drag (node_drag.cpp): a spring from the grabbed point G of a body to the target the marker gives.
+  struct DragSpring {
+    int body;
+    Vec3 p_LG;      // the grabbed point in the body's link frame (m)
+    Vec3 target_W;  // where the spring pulls it, world frame (m)
+    Vec3 p_GM_W;    // from the grabbed point to the marker origin at the grab, world frame (m)
+  };
+
   // What the physics thread steps. Data keeps a pointer to its model, so the model lives on the heap.
   struct World {
     std::shared_ptr<const Model> model;
@@ -73,6 +83,7 @@ class SimNode {
                                     // origin
     Eigen::VectorXd wrench_W;       // the wrench handed to the core (at the centre of mass; core/model/wrench.h)
     Eigen::VectorXd joint_efforts;  // per model joint: the commanded effort (N m or N; fixed joints 0)
+    std::vector<DragSpring> drags;
     explicit World(std::shared_ptr<const Model> loaded);
   };
 
@@ -86,6 +97,7 @@ class SimNode {
     double sim_time = 0.0;    // s
     uint64_t version = 0;
     bool stepped = false;     // a step has run since startup or the last reset (contact results exist)
+    std::vector<std::pair<Vec3, Vec3>> drag_arrows;  // per drag: the grabbed point and the target (m, world)
   };
   // What the publish thread keeps from one cycle to the next (touched by it only).
   struct PublishMemory {
@@ -94,6 +106,8 @@ class SimNode {
     std::vector<int> shown_pairs, active_pairs;  // pairs with contact markers: last published, current
     double last_tf_time = -1.0;              // s, simulation time of the last /tf
     uint64_t last_version = 0;               // snapshot version last published
+    int shown_drag_arrows = 0;               // drag arrows last published (ids 0 ... n-1)
+    double next_drag_update = 0.0;           // s of wall time: the next pose update of the interactive markers
   };
   // A ~step or ~run_steps request: steps run by the physics thread while paused. Guarded by mailbox_mutex_.
   struct StepJob {
@@ -150,6 +164,11 @@ class SimNode {
   LiveParams Live() const;
   void SetUpReconfigure();
   void OnReconfigure(SimNodeConfig& next);
+  // node_drag.cpp: interactive markers that push bodies.
+  void SetUpDragMarkers(const Model& model, const State& state);
+  void OnDrag(const visualization_msgs::InteractiveMarkerFeedbackConstPtr& feedback);
+  void AddDragWrenches();  // physics thread, into wrench_W
+  void UpdateDragMarkers(const Snapshot& snapshot, PublishMemory* memory);
   // node_publishers.cpp: one function per topic.
   void AdvertiseTopics();
   void PublishClock(double sim_time);
@@ -165,6 +184,7 @@ class SimNode {
   void SendBodyStates(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to);
   void SendJointStates(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to);
   void SendMarkers(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to);
+  void AppendDragArrows(const Snapshot& snapshot, int shown, double size, visualization_msgs::MarkerArray* msg) const;
   void UpdateDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status);
   // node_services.cpp: services and command topics (run on the physics thread through the mailbox).
   void AdvertiseServices();
@@ -211,6 +231,10 @@ class SimNode {
 
   std::mutex diag_mutex_;
   DiagnosticCounters diag_;
+
+  std::unique_ptr<interactive_markers::InteractiveMarkerServer> drag_server_;
+  std::mutex drag_mutex_;
+  std::set<std::string> dragged_;  // bodies being dragged (their marker is the user's); guarded by drag_mutex_
 
   std::mutex clock_mutex_;
   double last_clock_ = -1.0;                 // s of sim time, the latest /clock
