@@ -2,6 +2,7 @@
 #include "implicit_sim/ros/node_params.h"
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <vector>
@@ -44,7 +45,7 @@ void ReadOptionParams(const ros::NodeHandle& pnh, StepperOptions* options) {
 
 // The node's own private parameters besides the options table's.
 const char* const kNodeParams[] = {"scene", "scenes_dir", "paused", "on_fault", "world_frame", "publish_joint_link_tf",
-                                   "interactive_markers"};
+                                   "interactive_markers", "floating_root"};
 
 void RefuseUnknownParams(const ros::NodeHandle& pnh) {
   std::vector<std::string> names;
@@ -107,6 +108,7 @@ NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
   p.world_frame = ReadParam(pnh, "world_frame", p.world_frame);
   p.publish_joint_link_tf = ReadParam(pnh, "publish_joint_link_tf", p.publish_joint_link_tf);
   p.interactive_markers = ReadParam(pnh, "interactive_markers", p.interactive_markers);
+  p.floating_root = ReadParam(pnh, "floating_root", p.floating_root);
   if (p.world_frame.empty()) throw std::invalid_argument("parameter ~world_frame must not be empty");
   std::string error;
   if (!p.options.IsValid(&error)) throw std::invalid_argument(error);
@@ -120,7 +122,7 @@ void CheckWorldFrame(const Model& model, const std::string& world_frame) {
   }
 }
 
-Model LoadNodeScene(const ros::NodeHandle& nh, const NodeParams& p) {
+SceneText ReadNodeScene(const ros::NodeHandle& nh, const NodeParams& p) {
   if (!p.scene.empty()) {
     const bool is_path = p.scene.find('/') != std::string::npos ||
                          (p.scene.size() > 5 && p.scene.substr(p.scene.size() - 5) == ".urdf");
@@ -128,13 +130,14 @@ Model LoadNodeScene(const ros::NodeHandle& nh, const NodeParams& p) {
     if (!std::ifstream(path)) {
       throw std::invalid_argument("parameter ~scene = '" + p.scene + "': no scene file '" + path + "'");
     }
-    return LoadSceneFromFile(path);
+    const std::filesystem::path file(path);
+    return SceneText{ReadSceneFile(path), file.stem().string(), file.parent_path().string()};
   }
   std::string xml;
   if (!nh.getParam("robot_description", xml)) {
     throw std::invalid_argument("no scene: set ~scene (file path or scene name) or the robot_description parameter");
   }
-  return LoadSceneFromString(xml, "robot_description");
+  return SceneText{xml, "robot_description", ""};
 }
 
 }  // namespace implicit_sim

@@ -25,14 +25,6 @@ void CheckWrenchValues(const Vec3& force, const Vec3& torque, std::string* error
   }
 }
 
-// A service's answer when the node stops before the physics thread ran the request.
-template <typename Response>
-bool ShuttingDown(Response& res) {
-  res.success = false;
-  res.message = "refused: the node is shutting down";
-  return true;
-}
-
 }  // namespace
 
 void SimNode::AdvertiseServices() {
@@ -46,6 +38,9 @@ void SimNode::AdvertiseServices() {
   services_.push_back(pnh_.advertiseService("apply_body_wrench", &SimNode::OnApplyWrench, this));
   wrench_sub_ = pnh_.subscribe("wrench_cmd", 100, &SimNode::OnWrenchCommand, this);
   services_.push_back(pnh_.advertiseService("set_joint_efforts", &SimNode::OnSetJointEfforts, this));
+  services_.push_back(pnh_.advertiseService("spawn", &SimNode::OnSpawn, this));
+  services_.push_back(pnh_.advertiseService("delete", &SimNode::OnDelete, this));
+  services_.push_back(pnh_.advertiseService("load_scene", &SimNode::OnLoadScene, this));
   joint_effort_sub_ = pnh_.subscribe("joint_effort_cmd", 100, &SimNode::OnJointEffortCommand, this);
   run_steps_server_ = std::make_unique<actionlib::SimpleActionServer<implicit_sim::RunStepsAction>>(
       pnh_, "run_steps", [this](const implicit_sim::RunStepsGoalConstPtr& goal) { OnRunStepsGoal(goal); }, false);
@@ -72,7 +67,7 @@ bool SimNode::OnPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& 
            }
            res.success = true;
            res.message = "paused at t = " + FormatNumber(SimTime()) + " s";
-         }) || ShuttingDown(res);
+         }) || ShuttingDownAnswer(res);
 }
 
 bool SimNode::OnUnpause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
@@ -93,7 +88,7 @@ bool SimNode::OnUnpause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
            }
            res.success = true;
            res.message = "running from t = " + FormatNumber(SimTime()) + " s";
-         }) || ShuttingDown(res);
+         }) || ShuttingDownAnswer(res);
 }
 
 bool SimNode::OnReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
@@ -106,7 +101,7 @@ bool SimNode::OnReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& 
            }
            res.success = true;
            res.message = "bodies back to their initial state at t = " + FormatNumber(SimTime()) + " s";
-         }) || ShuttingDown(res);
+         }) || ShuttingDownAnswer(res);
 }
 
 bool SimNode::OnClearWrenches(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
@@ -116,7 +111,7 @@ bool SimNode::OnClearWrenches(std_srvs::Trigger::Request&, std_srvs::Trigger::Re
            world_->commanded_W.setZero();
            res.success = true;
            res.message = "cleared " + std::to_string(n) + " timed wrenches and all wrench commands";
-         }) || ShuttingDown(res);
+         }) || ShuttingDownAnswer(res);
 }
 
 bool SimNode::OnGetBodyState(implicit_sim::GetBodyState::Request& req, implicit_sim::GetBodyState::Response& res) {
@@ -140,7 +135,7 @@ bool SimNode::OnSetBodyState(implicit_sim::SetBodyState::Request& req, implicit_
              SaveSnapshot();
            }
            res.message = res.success ? "set '" + req.state.name + "'" : error;
-         }) || ShuttingDown(res);
+         }) || ShuttingDownAnswer(res);
 }
 
 bool SimNode::OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req,
@@ -170,7 +165,7 @@ bool SimNode::OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req,
            world_->wrenches.push_back(w);
            res.success = true;
            res.message = "wrench on '" + req.body + "' from t = " + FormatNumber(w.start) + " s";
-         }) || ShuttingDown(res);
+         }) || ShuttingDownAnswer(res);
 }
 
 void SimNode::OnWrenchCommand(const implicit_sim::BodyWrench::ConstPtr& msg) {
@@ -244,7 +239,7 @@ bool SimNode::OnSetJointEfforts(implicit_sim::SetJointEfforts::Request& req,
            std::string error;
            res.success = SetJointEfforts(req.name, req.effort, &error);
            res.message = res.success ? "set the effort of " + std::to_string(req.name.size()) + " joints" : error;
-         }) || ShuttingDown(res);
+         }) || ShuttingDownAnswer(res);
 }
 
 }  // namespace implicit_sim

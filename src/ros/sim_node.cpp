@@ -46,8 +46,8 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
       live_(params_.live),
       live_options_(params_.options),
       diagnostics_(nh, pnh) {
-  world_ = std::make_unique<World>(std::make_shared<const Model>(LoadNodeScene(nh, params_)));
-  CheckWorldFrame(*world_->model, params_.world_frame);
+  world_ = BuildWorld(ReadNodeScene(nh, params_));
+  PublishRobotDescription(world_->urdf);
   const Model& model = *world_->model;
   paused_ = params_.paused;
   diag_.paused = paused_;

@@ -56,7 +56,9 @@ struct NodeParams {
   // Whether /tf carries the links that hang on joints (world -> link, like every other body). Set false to leave them
   // to robot_state_publisher fed by /joint_states (it publishes parent -> child along the URDF tree).
   bool publish_joint_link_tf = true;
-  bool interactive_markers = true;  // an interactive marker per moving body (~drag) that pushes it with the mouse
+  bool interactive_markers = true;
+  // A scene whose root link is not `world` (a robot URDF): false welds the root to the world, true makes it free.
+  bool floating_root = false;  // an interactive marker per moving body (~drag) that pushes it with the mouse
   // Reads and validates; throws std::invalid_argument naming the parameter and its range, or an unknown private
   // parameter (a misspelt name would otherwise be ignored silently).
   static NodeParams Read(const ros::NodeHandle& pnh);
@@ -65,8 +67,13 @@ struct NodeParams {
 // Throws std::invalid_argument when ~world_frame names a link of the model (tf would get world_frame -> world_frame).
 void CheckWorldFrame(const Model& model, const std::string& world_frame);
 
+// A scene's URDF text, its name and the directory its relative mesh paths resolve against ("" for text).
+struct SceneText {
+  std::string urdf, name, dir;
+};
+
 // The scene the parameters name (~scene, else the robot_description parameter of nh); throws std::invalid_argument
-// naming ~scene or robot_description when there is none.
-Model LoadNodeScene(const ros::NodeHandle& nh, const NodeParams& params);
+// naming ~scene or robot_description when there is none, or the loader's message.
+SceneText ReadNodeScene(const ros::NodeHandle& nh, const NodeParams& params);
 
 }  // namespace implicit_sim

@@ -31,6 +31,9 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include "implicit_sim/ApplyBodyWrench.h"
+#include "implicit_sim/Delete.h"
+#include "implicit_sim/LoadScene.h"
+#include "implicit_sim/Spawn.h"
 #include "implicit_sim/BodyWrench.h"
 #include "implicit_sim/Contacts.h"
 #include "implicit_sim/GetBodyState.h"
@@ -40,6 +43,7 @@
 #include "implicit_sim/SimNodeConfig.h"
 #include "implicit_sim/Step.h"
 #include "implicit_sim/core/model/model.h"
+#include "implicit_sim/core/model/urdf_loader.h"
 #include "implicit_sim/core/step/time_stepper.h"
 #include "implicit_sim/ros/node_params.h"
 
@@ -48,6 +52,17 @@ namespace implicit_sim {
 // The largest command the node accepts: |force| (N), |torque| (N m) and |joint effort| (N m or N). Larger commands
 // are refused; they only drive a step into divergence.
 constexpr double kMaxCommand = 1e9;
+
+// A service's answer when the node stops before the physics thread ran the request.
+template <typename Response>
+bool ShuttingDownAnswer(Response& res) {
+  res.success = false;
+  res.message = "refused: the node is shutting down";
+  return true;
+}
+
+// A 'package://pkg/path' URI as a file path through rospack; "" when the package is unknown or it is no such URI.
+std::string ResolvePackageUri(const std::string& uri);
 
 class SimNode {
  public:
@@ -84,6 +99,8 @@ class SimNode {
     Eigen::VectorXd wrench_W;       // the wrench handed to the core (at the centre of mass; core/model/wrench.h)
     Eigen::VectorXd joint_efforts;  // per model joint: the commanded effort (N m or N; fixed joints 0)
     std::vector<DragSpring> drags;
+    std::string urdf;       // the scene's URDF text (what ~spawn and ~delete edit)
+    std::string scene_dir;  // where its relative mesh paths resolve ("" for a scene given as text)
     explicit World(std::shared_ptr<const Model> loaded);
   };
 
@@ -133,6 +150,17 @@ class SimNode {
     bool done = false;
   };
 
+  // node_world.cpp: the open world.
+  LoaderOptions SceneLoaderOptions(const std::string& mesh_directory, std::vector<std::string>* warnings) const;
+  // The scene a request names (its text, or a file under the allowed directories); false with *error otherwise.
+  bool ReadRequestedScene(const std::string& urdf, const std::string& file, SceneText* out, std::string* error) const;
+  std::unique_ptr<World> BuildWorld(const SceneText& scene) const;  // throws std::invalid_argument (the loader's)
+  void CarryOver(const World& from, World* to) const;  // the shared bodies' state and commands, by name
+  void ReplaceWorld(std::unique_ptr<World> next);       // physics thread
+  void PublishRobotDescription(const std::string& urdf) const;
+  bool OnSpawn(implicit_sim::Spawn::Request& req, implicit_sim::Spawn::Response& res);
+  bool OnDelete(implicit_sim::Delete::Request& req, implicit_sim::Delete::Response& res);
+  bool OnLoadScene(implicit_sim::LoadScene::Request& req, implicit_sim::LoadScene::Response& res);
   // sim_node.cpp: the mailbox and the physics thread.
   // Runs fn on the physics thread between two steps and waits for it; false (fn not run) when the node is stopping.
   bool RunBetweenSteps(std::function<void()> fn);
