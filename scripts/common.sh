@@ -11,7 +11,7 @@ APT_PACKAGES="build-essential cmake pkg-config googletest libgtest-dev catkin li
   libros-rosgraph-msgs-dev ros-message-generation ros-message-runtime librostest-dev python3-rostest
   libeigen3-dev coinor-libipopt-dev libsuitesparse-dev liburdfdom-dev libtinyxml2-dev libdiagnostic-updater-dev python3-rosbag python3-matplotlib locales
   parallel python3-yaml python3-rospy python3-geometry-msgs python3-sensor-msgs python3-tf2-msgs python3-visualization-msgs
-  python3-diagnostic-msgs python3-rostopic"
+  python3-diagnostic-msgs python3-rostopic libassimp-dev libqhull-dev"
 
 install_packages() {
   local missing=""
