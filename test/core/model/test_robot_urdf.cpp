@@ -28,6 +28,12 @@ const Vec3 kHalf(0.125, 0.0625, 0.25);
 // The box's centre in its mesh frame (m): the mesh is not centred on its frame's origin.
 const Vec3 kCentre(0.25, 0.0, -0.125);
 
+std::string Scientific(double value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.3e", value);
+  return text;
+}
+
 std::vector<Vec3> BoxCorners(const Vec3& half, const Vec3& centre) {
   std::vector<Vec3> corners;
   for (int i = 0; i < 8; ++i) {
@@ -330,7 +336,9 @@ TEST_F(RobotUrdf, TheArmSwingsDownUnderGravityFromTheFixedBase) {
   }
   // Horizontal at the start; about +y a downward swing of the +x arm is a positive angle.
   const double angle = JointPosition(model, state, shoulder);
-  RecordProperty("shoulder_angle_rad", std::to_string(angle));
+  RecordProperty("shoulder_angle_rad", Scientific(angle));
+  RecordProperty("joint_drift_m", Scientific(worst_m));
+  RecordProperty("joint_drift_rad", Scientific(worst_rad));
   EXPECT_GT(angle, 0.5);
   EXPECT_LT(worst_m, 1e-6);
   EXPECT_LT(worst_rad, 1e-6);
@@ -366,7 +374,8 @@ TEST_F(RobotUrdf, AMeshBoxRestsOnAPlaneAtTheHeightOfTheSameUrdfBox) {
     rest[m] = X_WB.translation().z();
     EXPECT_NEAR(lowest.z(), 0.0, 1e-3);
   }
-  RecordProperty("rest_height_m", std::to_string(rest[0]));
+  RecordProperty("rest_height_m", Scientific(rest[0]));
+  RecordProperty("rest_height_difference_m", Scientific(rest[0] - rest[1]));
   EXPECT_NEAR(rest[0], rest[1], 1e-6);
   EXPECT_NEAR(rest[1], 0.25, 1e-3);
 }
@@ -449,7 +458,7 @@ TEST(ConvexHull, AHullAboveTheCapIsSimplifiedAndStillContainsEveryPoint) {
   EXPECT_EQ(full.faces.size(), 796u);  // a triangulated sphere: 2 V - 4
   const ConvexHull capped = ComputeConvexHull(points, 64);
   RecordProperty("capped_faces", std::to_string(capped.faces.size()));
-  RecordProperty("merge_radius_m", std::to_string(capped.merge_radius));
+  RecordProperty("merge_radius_m", Scientific(capped.merge_radius));
   EXPECT_LE(capped.faces.size(), 64u);
   EXPECT_GE(capped.faces.size(), 8u);
   EXPECT_EQ(capped.coplanar_faces, 796);
