@@ -22,7 +22,7 @@ constexpr int kMaxMergeDoublings = 30;
 
 void CheckSpansAVolume(const std::vector<Vec3>& points) {
   if (points.size() < 4) {
-    throw std::invalid_argument("fewer than 4 points (" + std::to_string(points.size()) + "): no volume");
+    throw std::invalid_argument("fewer than 4 vertices (" + std::to_string(points.size()) + "): no volume");
   }
   Vec3 mean = Vec3::Zero();
   for (const Vec3& p : points) {
