@@ -21,17 +21,17 @@ namespace fs = std::filesystem;
 
 bool StartsWith(const std::string& text, const std::string& prefix) { return text.rfind(prefix, 0) == 0; }
 
-// A directory named `package` in `root` or up to two levels below it (catkin workspaces nest packages in folders).
+// A directory named `package` in `root`, or one with a package.xml up to two levels below it (catkin workspaces nest
+// packages in folders).
 std::string FindPackageIn(const std::string& root, const std::string& package) {
   std::error_code ec;
   if (fs::is_directory(fs::path(root) / package, ec)) return (fs::path(root) / package).string();
   fs::recursive_directory_iterator it(root, fs::directory_options::skip_permission_denied, ec), end;
   for (; !ec && it != end; it.increment(ec)) {
-    if (it.depth() >= 2) {
-      it.disable_recursion_pending();
-      continue;
+    if (it->is_directory(ec) && it->path().filename() == package && fs::exists(it->path() / "package.xml", ec)) {
+      return it->path().string();
     }
-    if (it->is_directory(ec) && it->path().filename() == package) return it->path().string();
+    if (it.depth() >= 2) it.disable_recursion_pending();
   }
   return "";
 }

@@ -89,7 +89,8 @@ ConvexShape ReadShape(const std::string& link, const urdf::Collision& collision,
       const auto* c = static_cast<const urdf::Cylinder*>(g);
       return MakeCylinder(c->radius, c->length / 2.0);
     }
-    const auto* mesh = static_cast<const urdf::Mesh*>(g);  // the only other type CheckGeometry lets through
+    if (g->type != urdf::Geometry::MESH) Fail("link '" + link + "': unknown collision geometry type");
+    const auto* mesh = static_cast<const urdf::Mesh*>(g);
     std::string warning;
     ConvexShape hull =
         MeshHullShape(link, mesh->filename, Vec3(mesh->scale.x, mesh->scale.y, mesh->scale.z), options, &warning);
@@ -370,8 +371,7 @@ void ReadInertia(const urdf::Link& link, const tinyxml2::XMLElement* implicit, c
   CheckInertia(body->I_B, where + " <implicit> (inertia from 'mass' and the shape)");
 }
 
-// Where the root link goes: 'world' is the world; another root is welded to it or free at options.X_W_root.
-RootPlacement PlaceRoot(const std::string& root, const LoaderOptions& options, const std::string& scene) {
+void CheckLoaderOptions(const LoaderOptions& options) {
   const Pose& X = options.X_W_root;
   const bool rigid = X.matrix().allFinite() && X.matrix().row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)) &&
                      (X.linear().transpose() * X.linear()).isApprox(Mat3::Identity(), 1e-9) &&
@@ -381,6 +381,11 @@ RootPlacement PlaceRoot(const std::string& root, const LoaderOptions& options, c
     Fail("LoaderOptions::max_hull_faces = " + std::to_string(options.max_hull_faces) +
          " is out of range [4, 10000]");
   }
+}
+
+// Where the root link goes: 'world' is the world; another root is welded to it or free at options.X_W_root.
+RootPlacement PlaceRoot(const std::string& root, const LoaderOptions& options, const std::string& scene) {
+  const Pose& X = options.X_W_root;
   if (root == "world") {
     if (options.floating_root || !X.isApprox(Pose::Identity(), 0.0)) {
       Fail(scene + ": the root link is 'world'; LoaderOptions::floating_root and X_W_root apply to another root");
@@ -396,6 +401,7 @@ RootPlacement PlaceRoot(const std::string& root, const LoaderOptions& options, c
 }  // namespace
 
 Model LoadSceneFromString(const std::string& xml, const std::string& scene_name, const LoaderOptions& options) {
+  CheckLoaderOptions(options);
   const std::string scene = "scene '" + scene_name + "'";
   if (xml.size() > kMaxSceneBytes) {
     Fail(scene + ": " + std::to_string(xml.size()) + " bytes exceed the limit of " + std::to_string(kMaxSceneBytes) +

@@ -129,6 +129,9 @@ class RobotUrdf : public ::testing::Test {
     fs::create_directories(dir_ + "/share/test_robot_meshes/meshes");
     WriteBinaryStl(dir_ + "/box_binary.stl", BoxCorners(kHalf, kCentre));
     WriteBinaryStl(dir_ + "/share/test_robot_meshes/meshes/box.stl", BoxCorners(kHalf, kCentre));
+    fs::create_directories(dir_ + "/share/robots/nested_meshes");  // a package one folder down, as in catkin src/
+    std::ofstream(dir_ + "/share/robots/nested_meshes/package.xml") << "<package/>";
+    WriteOctahedronObj(dir_ + "/share/robots/nested_meshes/octahedron.obj");
     WriteAsciiStl(dir_ + "/box_ascii.stl", BoxCorners(kHalf, kCentre));
     WriteOctahedronObj(dir_ + "/octahedron.obj");
     WriteHexagonalPrismObj(dir_ + "/prism.obj");
@@ -268,6 +271,9 @@ TEST_F(RobotUrdf, ScaleAndPackageUriThroughRosPackagePathAndTheResolver) {
   std::vector<Vec3> corners = BoxCorners(kHalf, kCentre);
   for (Vec3& c : corners) c = c.cwiseProduct(Vec3(2, 1, 0.5));
   EXPECT_EQ(ExpectHullOfVertices(scaled.bodies[scaled.FindBody("arm")], corners), 6);
+
+  const Model nested = Load(Robot("package://nested_meshes/octahedron.obj"));
+  EXPECT_EQ(nested.bodies[nested.FindBody("arm")].shape.inequalities.size(), 8u);
 
   LoaderOptions options;
   std::vector<std::string> asked;
