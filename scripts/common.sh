@@ -15,7 +15,8 @@ APT_PACKAGES="build-essential cmake pkg-config googletest libgtest-dev catkin li
   libactionlib-dev libactionlib-msgs-dev ros-actionlib-msgs python3-actionlib python3-actionlib-msgs
   python3-std-srvs ros-std-srvs python3-rosservice python3-rosnode python3-roslaunch rosbash gdb valgrind
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
-  libinteractive-markers-dev python3-interactive-markers libroslib-dev"
+  libinteractive-markers-dev python3-interactive-markers libroslib-dev
+  libassimp-dev libqhull-dev"
 
 install_packages() {
   local missing=""

@@ -1,5 +1,6 @@
 #include "implicit_sim/core/geometry/shapes.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -122,6 +123,11 @@ double ConvexShape::BoundingRadius() const {
     case ShapeType::kBox: return size.norm();
     case ShapeType::kCylinder:
     case ShapeType::kPrism: return std::hypot(size[0], size[2]);
+    case ShapeType::kIntersection: {
+      double radius = vertices.empty() ? std::numeric_limits<double>::infinity() : 0.0;
+      for (const Vec3& v : vertices) radius = std::max(radius, v.norm());
+      return radius;
+    }
     default: return std::numeric_limits<double>::infinity();
   }
 }

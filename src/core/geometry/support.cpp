@@ -53,6 +53,17 @@ bool SupportPointInShapeFrame(const ConvexShape& shape, const Vec3& u, Vec3* p) 
       }
       return true;
     }
+    case ShapeType::kIntersection: {  // a polytope with known vertices: the best vertex
+      if (shape.vertices.empty()) return false;
+      double best = -1e300;
+      for (const Vec3& v : shape.vertices) {
+        if (u.dot(v) > best) {
+          best = u.dot(v);
+          *p = v;
+        }
+      }
+      return true;
+    }
     default:
       return false;
   }

@@ -105,19 +105,24 @@ JointStarts ReadJointStarts(const tinyxml2::XMLElement* sim, const urdf::ModelIn
   return starts;
 }
 
-bool IsWeldedToWorld(const urdf::Link& link) {
+bool IsWeldedToWorld(const urdf::Link& link, const RootPlacement& root) {
   const urdf::JointConstSharedPtr joint = link.parent_joint;
-  if (!joint || joint->type != urdf::Joint::FIXED) return false;
-  const urdf::LinkConstSharedPtr parent = link.getParent();
-  return parent->name == "world" || IsWeldedToWorld(*parent);
+  if (!joint) return root.fixed;  // the root link
+  if (joint->type != urdf::Joint::FIXED) return false;
+  return IsWeldedToWorld(*link.getParent(), root);
 }
 
-Pose InitialLinkPose(const urdf::Link& link, const JointStarts& starts) {
+bool IsFrameLink(const urdf::Link& link) {
+  return !link.inertial && link.collision_array.empty() && link.parent_joint &&
+         link.parent_joint->type == urdf::Joint::FIXED;
+}
+
+Pose InitialLinkPose(const urdf::Link& link, const JointStarts& starts, const RootPlacement& root) {
   const urdf::JointConstSharedPtr joint = link.parent_joint;
-  if (!joint) return Pose::Identity();  // 'world'
+  if (!joint) return root.X_W_root;  // the root link ('world': identity)
   const auto start = starts.find(joint->name);
   const double q = start == starts.end() ? 0.0 : start->second.position;
-  const Pose X_WP = InitialLinkPose(*link.getParent(), starts);
+  const Pose X_WP = InitialLinkPose(*link.getParent(), starts, root);
   const Pose X_PJ = ToPose(joint->parent_to_joint_origin_transform);
   if (!X_PJ.matrix().allFinite()) Fail(JointWhere(*joint) + ": origin must be finite");
   return X_WP * X_PJ * JointMotion(*joint, q);
@@ -198,9 +203,22 @@ void SetChildVelocity(const Model& model, const Joint& joint, const Pose& X_WJ, 
   }
 }
 
+// The nearest link at or above `link_name` that is a body or 'world' (frame links are none), and the pose X_AL of the
+// link frame L of `link_name` in that link's frame A (frame links hang on fixed joints: their origins compose).
+std::string NearestBodyLink(const urdf::ModelInterface& urdf, const Model& model, std::string link_name, Pose* X_AL) {
+  *X_AL = Pose::Identity();
+  while (link_name != "world" && model.FindBody(link_name) < 0) {
+    const urdf::JointConstSharedPtr joint = urdf.getLink(link_name)->parent_joint;
+    *X_AL = ToPose(joint->parent_to_joint_origin_transform) * *X_AL;
+    link_name = joint->parent_link_name;
+  }
+  return link_name;
+}
+
 }  // namespace
 
-void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, Model* model) {
+void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, const RootPlacement& root,
+                 Model* model) {
   std::vector<urdf::JointSharedPtr> ordered;
   for (const auto& [name, joint] : urdf.joints_) ordered.push_back(joint);
   // Parents before children: by depth below 'world', then by name (a strict total order: no stable sort needed).
@@ -216,6 +234,7 @@ void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, Mo
       continue;
     }
     const int child_index = model->FindBody(u->child_link_name);
+    if (child_index < 0) continue;  // a frame link
     Body& child = model->bodies[child_index];
     if (child.is_fixed) continue;  // welded to the world
     if (child.v_WB0 != Vec3::Zero() || child.w_WB0 != Vec3::Zero()) {
@@ -228,14 +247,16 @@ void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, Mo
                  : u->type == urdf::Joint::REVOLUTE  ? JointType::kRevolute
                  : u->type == urdf::Joint::PRISMATIC ? JointType::kPrismatic
                                                      : JointType::kContinuous;
-    joint.parent = world_parent ? -1 : model->FindBody(u->parent_link_name);
+    Pose X_AL;  // the URDF parent's link frame in the link frame A of the body it belongs to
+    const std::string parent_link = NearestBodyLink(urdf, *model, u->parent_link_name, &X_AL);
+    joint.parent = world_parent ? -1 : model->FindBody(parent_link);
     joint.child = child_index;
     ReadJointParameters(*u, starts, &joint);
     const Vec3 a = joint.type == JointType::kFixed ? Vec3::UnitX() : UnitAxis(*u);
-    const Pose X_LJ = ToPose(u->parent_to_joint_origin_transform);  // in the parent's link frame
-    const Pose X_PL = joint.parent < 0 ? Pose::Identity() : model->bodies[joint.parent].X_BL;
-    SetJointFrames(X_PL * X_LJ, child.X_BL, a, &joint);
-    const Pose X_WJ = InitialLinkPose(*urdf.getLink(u->parent_link_name), starts) * X_LJ;
+    const Pose X_AJ = X_AL * ToPose(u->parent_to_joint_origin_transform);  // in the parent body's link frame
+    const Pose X_PA = joint.parent < 0 ? Pose::Identity() : model->bodies[joint.parent].X_BL;
+    SetJointFrames(X_PA * X_AJ, child.X_BL, a, &joint);
+    const Pose X_WJ = InitialLinkPose(*urdf.getLink(parent_link), starts, root) * X_AJ;
     SetChildVelocity(*model, joint, X_WJ, a, &child);
     model->joints.push_back(joint);
   }

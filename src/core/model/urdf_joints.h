@@ -27,15 +27,26 @@ struct JointStart {
 using JointStarts = std::map<std::string, JointStart>;
 JointStarts ReadJointStarts(const tinyxml2::XMLElement* sim, const urdf::ModelInterface& urdf);
 
-// Whether a chain of fixed joints welds the link to 'world' (then it is a fixed body).
-bool IsWeldedToWorld(const urdf::Link& link);
-// The initial pose of the link frame in the world: the joint origins and initial joint motions from 'world' down.
-Pose InitialLinkPose(const urdf::Link& link, const JointStarts& starts);
+// Where the root of the link tree is: 'world' (fixed, identity), or a robot's base link welded to the world or free
+// at X_W_root (LoaderOptions).
+struct RootPlacement {
+  bool fixed = true;
+  Pose X_W_root = Pose::Identity();
+};
+
+// Whether a chain of fixed joints welds the link to a fixed root (then it is a fixed body); a fixed root is welded.
+bool IsWeldedToWorld(const urdf::Link& link, const RootPlacement& root);
+// A link that only marks a frame on a moving link: no <inertial>, no <collision>, on a fixed joint. It is no body:
+// joints below it hang on its nearest ancestor that is one.
+bool IsFrameLink(const urdf::Link& link);
+// The initial pose of the link frame in the world: the joint origins and initial joint motions from the root down.
+Pose InitialLinkPose(const urdf::Link& link, const JointStarts& starts, const RootPlacement& root);
 
 // Fills model->joints, parents before children, with every revolute, continuous and prismatic joint and every fixed
 // joint whose child moves, and gives each jointed child its initial velocity from its parent's and the joint's.
-// The bodies must be loaded (poses, body settings) and model->joints must be empty; call before Model::Finalize.
-void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, Model* model);
+// Frame links (IsFrameLink) are skipped. The bodies must be loaded (poses, body settings) and model->joints must be
+// empty; call before Model::Finalize.
+void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, const RootPlacement& root, Model* model);
 
 }  // namespace loader
 }  // namespace implicit_sim

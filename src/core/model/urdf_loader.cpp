@@ -3,6 +3,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <locale>
 #include <map>
 #include <set>
@@ -16,6 +17,7 @@
 
 #include "implicit_sim/core/base/format.h"
 #include "loader_util.h"
+#include "mesh_loader.h"
 #include "urdf_joints.h"
 
 namespace implicit_sim {
@@ -69,9 +71,11 @@ Inequality ReadPart(const tinyxml2::XMLElement* part, const std::string& where) 
   return q;
 }
 
-// The implicit shape of a link from its <implicit> element or, without one, from the stock geometry.
+// The implicit shape of a link from its <implicit> element or, without one, from the stock geometry (a mesh: its
+// convex hull, with one warning).
 ConvexShape ReadShape(const std::string& link, const urdf::Collision& collision,
-                      const tinyxml2::XMLElement* implicit) {
+                      const tinyxml2::XMLElement* implicit, const LoaderOptions& options,
+                      std::vector<std::string>* warnings) {
   const std::string where = "link '" + link + "' <implicit>";
   if (!implicit) {
     const urdf::Geometry* g = collision.geometry.get();
@@ -85,7 +89,13 @@ ConvexShape ReadShape(const std::string& link, const urdf::Collision& collision,
       const auto* c = static_cast<const urdf::Cylinder*>(g);
       return MakeCylinder(c->radius, c->length / 2.0);
     }
-    Fail("link '" + link + "': mesh collision geometry needs an <implicit> element");
+    if (g->type != urdf::Geometry::MESH) Fail("link '" + link + "': unknown collision geometry type");
+    const auto* mesh = static_cast<const urdf::Mesh*>(g);
+    std::string warning;
+    ConvexShape hull =
+        MeshHullShape(link, mesh->filename, Vec3(mesh->scale.x, mesh->scale.y, mesh->scale.z), options, &warning);
+    warnings->push_back(warning);
+    return hull;
   }
   const char* type_text = implicit->Attribute("type");
   if (!type_text) Fail(where + ": missing attribute 'type'");
@@ -211,7 +221,7 @@ void CheckLinkElements(const tinyxml2::XMLElement* link, const std::string& name
   }
 }
 
-// Link and joint names unique, joints between defined links, 'world' present, every number finite.
+// Link and joint names unique, joints between defined links, at least one link, every number finite.
 void CheckUrdfStructure(const tinyxml2::XMLElement* robot, const std::string& scene_name) {
   const std::string scene = "scene '" + scene_name + "'";
   if (!robot->Attribute("name")) Fail(scene + ": <robot> has no attribute 'name'");
@@ -222,7 +232,7 @@ void CheckUrdfStructure(const tinyxml2::XMLElement* robot, const std::string& sc
     if (!links.insert(name).second) Fail("link '" + std::string(name) + "' is defined more than once");
     CheckLinkElements(e, name);
   }
-  if (!links.count("world")) Fail(scene + ": no link named 'world' (the root link)");
+  if (links.empty()) Fail(scene + ": no <link> (the root link is 'world' or a robot's base link)");
   std::set<std::string> joints;
   for (auto* j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
     const char* name = j->Attribute("name");
@@ -361,9 +371,37 @@ void ReadInertia(const urdf::Link& link, const tinyxml2::XMLElement* implicit, c
   CheckInertia(body->I_B, where + " <implicit> (inertia from 'mass' and the shape)");
 }
 
+void CheckLoaderOptions(const LoaderOptions& options) {
+  const Pose& X = options.X_W_root;
+  const bool rigid = X.matrix().allFinite() && X.matrix().row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)) &&
+                     (X.linear().transpose() * X.linear()).isApprox(Mat3::Identity(), 1e-9) &&
+                     X.linear().determinant() > 0.0;
+  if (!rigid) Fail("LoaderOptions::X_W_root must be a finite rigid transform (rotation orthonormal, det +1)");
+  if (options.max_hull_faces < 4 || options.max_hull_faces > 10000) {
+    Fail("LoaderOptions::max_hull_faces = " + std::to_string(options.max_hull_faces) +
+         " is out of range [4, 10000]");
+  }
+}
+
+// Where the root link goes: 'world' is the world; another root is welded to it or free at options.X_W_root.
+RootPlacement PlaceRoot(const std::string& root, const LoaderOptions& options, const std::string& scene) {
+  const Pose& X = options.X_W_root;
+  if (root == "world") {
+    if (options.floating_root || !X.isApprox(Pose::Identity(), 0.0)) {
+      Fail(scene + ": the root link is 'world'; LoaderOptions::floating_root and X_W_root apply to another root");
+    }
+    return RootPlacement();
+  }
+  RootPlacement placement;
+  placement.fixed = !options.floating_root;
+  placement.X_W_root = X;
+  return placement;
+}
+
 }  // namespace
 
-Model LoadSceneFromString(const std::string& xml, const std::string& scene_name) {
+Model LoadSceneFromString(const std::string& xml, const std::string& scene_name, const LoaderOptions& options) {
+  CheckLoaderOptions(options);
   const std::string scene = "scene '" + scene_name + "'";
   if (xml.size() > kMaxSceneBytes) {
     Fail(scene + ": " + std::to_string(xml.size()) + " bytes exceed the limit of " + std::to_string(kMaxSceneBytes) +
@@ -383,9 +421,9 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name)
   }
   CheckUrdfStructure(robot, scene_name);
   const urdf::ModelInterfaceSharedPtr urdf_model = ParseWithUrdfdom(xml, scene_name);
-  if (!urdf_model->getRoot() || urdf_model->getRoot()->name != "world") {
-    Fail(scene + ": the root link must be named 'world'");
-  }
+  if (!urdf_model->getRoot()) Fail(scene + ": urdfdom found no root link");
+  const std::string root = urdf_model->getRoot()->name;
+  const RootPlacement placement = PlaceRoot(root, options, scene);
   const tinyxml2::XMLElement* sim = robot->FirstChildElement("implicit_sim");
   if (sim && sim->NextSiblingElement("implicit_sim")) Fail(scene + ": more than one <implicit_sim>");
   Model model;
@@ -396,6 +434,7 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name)
   }
   const JointStarts joint_starts = ReadJointStarts(sim, *urdf_model);
 
+  std::vector<std::string> warnings;
   std::vector<urdf::LinkSharedPtr> links;
   urdf_model->getLinks(links);
   std::map<std::string, urdf::LinkSharedPtr> by_name;
@@ -407,28 +446,32 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name)
     CheckNothingDropped(e, *link);
     if (e->FirstChildElement("implicit")) Fail("link '" + name + "': <implicit> belongs inside <collision>");
     if (name == "world") {
+      if (root != "world") Fail("link 'world': must be the root link (it hangs on a joint)");
       if (link->collision) Fail("link 'world': must have no <collision> (add a fixed link for static shapes)");
       continue;
     }
-    if (!link->parent_joint) Fail("link '" + name + "': no joint joins it to the tree under 'world'");
+    if (!link->parent_joint && name != root) {
+      Fail("link '" + name + "': no joint joins it to the tree under '" + root + "'");
+    }
     if (link->collision_array.size() > 1) {
       Fail("link '" + name + "': one <collision> per link (a body is one convex shape)");
     }
     const tinyxml2::XMLElement* collision_xml = e->FirstChildElement("collision");
     Body body;
     body.name = name;
-    body.is_fixed = IsWeldedToWorld(*link);
+    body.is_fixed = IsWeldedToWorld(*link, placement);
+    if (!body.is_fixed && IsFrameLink(*link)) continue;  // a frame on a moving link: no body
     const tinyxml2::XMLElement* implicit = collision_xml ? collision_xml->FirstChildElement("implicit") : nullptr;
     Pose X_LC = Pose::Identity();
     if (link->collision) {
       X_LC = ToPose(link->collision->origin);
-      body.shape = ReadShape(name, *link->collision, implicit);
+      body.shape = ReadShape(name, *link->collision, implicit, options, &warnings);
     }
     Pose X_LB = Pose::Identity();
     if (!body.is_fixed) ReadInertia(*link, implicit, X_LC, &body, &X_LB);
     body.X_BL = X_LB.inverse();
-    body.shape.X_BS = body.X_BL * X_LC;
-    body.X_WB0 = InitialLinkPose(*link, joint_starts) * X_LB;
+    body.shape.X_BS = body.X_BL * X_LC * body.shape.X_BS;  // a mesh hull's S is off its collision frame
+    body.X_WB0 = InitialLinkPose(*link, joint_starts, placement) * X_LB;
     model.bodies.push_back(body);
   }
   if (model.bodies.empty()) Fail("scene '" + scene_name + "': no link besides 'world'");
@@ -461,7 +504,7 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name)
       }
     }
   }
-  BuildJoints(*urdf_model, joint_starts, &model);
+  BuildJoints(*urdf_model, joint_starts, placement, &model);
   model.Finalize([&](int i, int j) {
     for (const auto& key : {std::make_pair(model.bodies[i].name, model.bodies[j].name),
                             std::make_pair(model.bodies[j].name, model.bodies[i].name)}) {
@@ -471,10 +514,17 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name)
     return default_friction;
   });
   if (model.moving_bodies.empty()) Fail("scene '" + scene_name + "': no moving body (use a 'floating' joint)");
+  for (const std::string& warning : warnings) {
+    if (options.warnings) {
+      options.warnings->push_back(warning);
+    } else {
+      std::cerr << warning << std::endl;
+    }
+  }
   return model;
 }
 
-Model LoadSceneFromFile(const std::string& path) {
+Model LoadSceneFromFile(const std::string& path, const LoaderOptions& options) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) Fail("scene file '" + path + "' is not a readable file");
   const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
@@ -489,7 +539,12 @@ Model LoadSceneFromFile(const std::string& path) {
   text << in.rdbuf();
   std::string name = path.substr(path.find_last_of('/') + 1);
   if (name.size() > 5 && name.substr(name.size() - 5) == ".urdf") name.resize(name.size() - 5);
-  return LoadSceneFromString(text.str(), name);
+  LoaderOptions file_options = options;
+  if (file_options.mesh_directory.empty()) {
+    file_options.mesh_directory = std::filesystem::path(path).parent_path().string();
+    if (file_options.mesh_directory.empty()) file_options.mesh_directory = ".";
+  }
+  return LoadSceneFromString(text.str(), name, file_options);
 }
 
 }  // namespace implicit_sim

@@ -117,7 +117,7 @@ TEST(UrdfLoader, RefusesBadScenesNamingWhatIsWrong) {
   ExpectRefused(Scene(kSphere, "<implicit_sim><wind/></implicit_sim>"), "<wind>");
   ExpectRefused(Scene("<geometry><box size='1 2'/></geometry>"),
                 "link 'ball' <collision> <geometry> <box> attribute 'size'");
-  ExpectRefused(Scene("<geometry><mesh filename='x.stl'/></geometry>"), "link 'ball': mesh");
+  ExpectRefused(Scene("<geometry><mesh filename='x.stl'/></geometry>"), "link 'ball': collision mesh 'x.stl'");
   ExpectRefused(Scene(kSphere, "", "", "floating"), "link 'ball'");
   ExpectRefused(Scene(kSphere, "", std::string("<inertial><mass value='1'/><inertia ixx='1' iyy='1' izz='1' ixy='0' "
                                                "ixz='0' iyz='0'/></inertial>"),

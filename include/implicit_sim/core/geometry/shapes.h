@@ -51,9 +51,12 @@ struct ConvexShape {
   double exponent = 2.0;
   int sides = 0;
   Pose X_BS = Pose::Identity();   // pose of the shape frame S in the body frame B
+  // kIntersection of half-spaces only (a polytope, e.g. a collision mesh's convex hull): its vertices in S (m). When
+  // set, they give the exact support point and bounding radius; empty for every other shape.
+  std::vector<Vec3> vertices;
 
   bool IsBounded() const { return type != ShapeType::kHalfSpace; }
-  // Largest |x_S| of a point of the shape (m); +inf for a half-space or a general intersection.
+  // Largest |x_S| of a point of the shape (m); +inf for a half-space or a general intersection without vertices.
   double BoundingRadius() const;
   // Volume (m^3) and inertia about the shape-frame origin for unit density (m^5), closed forms per primitive.
   // Throws std::invalid_argument for a shape without a closed form (half-space, general intersection).

@@ -8,7 +8,7 @@
 namespace implicit_sim {
 
 // The point of the posed shape farthest along the unit direction u_W: argmax { u . x }. Returns false for shapes
-// without a closed form (a half-space, a general intersection).
+// without a closed form (a half-space, a general intersection without vertices).
 bool SupportPoint(const ConvexShape& shape, const Pose& X_WB, const Vec3& u_W, Vec3* p_W);
 
 // Closest points in closed form for a sphere and a sphere, or any primitive with a closed-form support point and a

@@ -1,4 +1,6 @@
-// Scenes as URDF: a root link `world`, moving bodies on `floating` joints, static bodies on `fixed` joints.
+// Scenes as URDF: a root link `world`, moving bodies on `floating` joints, static bodies on `fixed` joints. A robot
+// URDF whose root link is not `world` loads with its root fixed to the world (or free: LoaderOptions::floating_root),
+// and a <mesh> collision becomes the convex hull of the mesh's vertices.
 // The implicit shapes and the simulation parameters live in extension elements that stock URDF tools ignore:
 //   inside <collision>:   <implicit type="..." .../>    (optional for stock sphere, box and cylinder geometry)
 //   under <robot>:        <implicit_sim gravity="0 0 -9.81">
@@ -10,15 +12,37 @@
 // doc/scenes.md documents every element and attribute with units and allowed ranges.
 #pragma once
 
+#include <functional>
 #include <string>
+#include <vector>
 
 #include "implicit_sim/core/model/model.h"
 
 namespace implicit_sim {
 
+struct LoaderOptions {
+  // A root link other than 'world': false welds it to the world at X_W_root (a static body), true makes it a free
+  // body starting at X_W_root. Both must stay at their defaults when the root link is 'world'.
+  bool floating_root = false;
+  Pose X_W_root = Pose::Identity();  // pose of the root link frame in the world
+  // Resolves a 'package://pkg/path' mesh URI to a file path ("" when it cannot); tried before ROS_PACKAGE_PATH. The
+  // ROS layer sets it; the core never includes ROS headers.
+  std::function<std::string(const std::string& uri)> resolve_package_uri;
+  // Directory of relative mesh paths. Empty: the URDF file's directory (LoadSceneFromFile) or the working directory
+  // (LoadSceneFromString).
+  std::string mesh_directory;
+  // A mesh hull with more faces is simplified by merging nearly coplanar facets until it has at most this many: each
+  // face is one inequality, hence one multiplier per contact in the step NCP. Range [4, 10000].
+  int max_hull_faces = 64;
+  // One line per mesh collision (the link, the file and the hull's face count) is appended here; null: written to
+  // std::cerr.
+  std::vector<std::string>* warnings = nullptr;
+};
+
 // Throws std::invalid_argument naming the link, joint or attribute and the allowed range. Never returns a partial
 // model.
-Model LoadSceneFromString(const std::string& urdf_xml, const std::string& scene_name = "scene");
-Model LoadSceneFromFile(const std::string& path);
+Model LoadSceneFromString(const std::string& urdf_xml, const std::string& scene_name = "scene",
+                          const LoaderOptions& options = LoaderOptions());
+Model LoadSceneFromFile(const std::string& path, const LoaderOptions& options = LoaderOptions());
 
 }  // namespace implicit_sim

@@ -1,0 +1,556 @@
+// Real robot URDFs: a root link other than 'world' (fixed by default, free on request), links without collision or
+// inertial, frame links, <transmission> and <gazebo> elements, and <mesh> collisions replaced by their convex hulls
+// (binary and ASCII STL and OBJ written here into a temp dir; package:// through ROS_PACKAGE_PATH and a resolver).
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "geometry/convex_hull.h"
+#include "implicit_sim/core/geometry/support.h"
+#include "implicit_sim/core/model/joints.h"
+#include "implicit_sim/core/model/urdf_loader.h"
+#include "implicit_sim/core/step/time_stepper.h"
+
+namespace implicit_sim {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double kPi = 3.14159265358979323846;
+// Half extents of the test box (m), exact in single precision (binary STL stores floats).
+const Vec3 kHalf(0.125, 0.0625, 0.25);
+// The box's centre in its mesh frame (m): the mesh is not centred on its frame's origin.
+const Vec3 kCentre(0.25, 0.0, -0.125);
+
+std::string Scientific(double value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.3e", value);
+  return text;
+}
+
+std::vector<Vec3> BoxCorners(const Vec3& half, const Vec3& centre) {
+  std::vector<Vec3> corners;
+  for (int i = 0; i < 8; ++i) {
+    corners.push_back(centre + Vec3(i & 1 ? half.x() : -half.x(), i & 2 ? half.y() : -half.y(),
+                                    i & 4 ? half.z() : -half.z()));
+  }
+  return corners;
+}
+
+// The 12 triangles of a box as corner indices (BoxCorners numbering).
+const int kBoxTriangles[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                                  {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+
+void WriteBinaryStl(const std::string& path, const std::vector<Vec3>& corners) {
+  std::ofstream out(path, std::ios::binary);
+  const std::string header(80, ' ');
+  out.write(header.data(), 80);
+  const uint32_t count = 12;
+  out.write(reinterpret_cast<const char*>(&count), 4);
+  for (const auto& triangle : kBoxTriangles) {
+    float values[12] = {0, 0, 0};
+    for (int v = 0; v < 3; ++v) {
+      for (int c = 0; c < 3; ++c) values[3 + 3 * v + c] = static_cast<float>(corners[triangle[v]][c]);
+    }
+    out.write(reinterpret_cast<const char*>(values), sizeof(values));
+    const uint16_t attribute = 0;
+    out.write(reinterpret_cast<const char*>(&attribute), 2);
+  }
+}
+
+void WriteAsciiStl(const std::string& path, const std::vector<Vec3>& corners) {
+  std::ofstream out(path);
+  out.precision(17);
+  out << "solid box\n";
+  for (const auto& triangle : kBoxTriangles) {
+    out << "facet normal 0 0 0\nouter loop\n";
+    for (int v = 0; v < 3; ++v) {
+      out << "vertex " << corners[triangle[v]].x() << " " << corners[triangle[v]].y() << " "
+          << corners[triangle[v]].z() << "\n";
+    }
+    out << "endloop\nendfacet\n";
+  }
+  out << "endsolid box\n";
+}
+
+// An OBJ of the given vertices, with the faces as 1-based index lists.
+void WriteObj(const std::string& path, const std::vector<Vec3>& vertices, const std::vector<std::vector<int>>& faces) {
+  std::ofstream out(path);
+  out.precision(17);
+  for (const Vec3& v : vertices) out << "v " << v.x() << " " << v.y() << " " << v.z() << "\n";
+  for (const auto& face : faces) {
+    out << "f";
+    for (int i : face) out << " " << i;
+    out << "\n";
+  }
+}
+
+std::vector<Vec3> OctahedronVertices() {
+  return {Vec3(0.1, 0, 0), Vec3(-0.1, 0, 0), Vec3(0, 0.1, 0), Vec3(0, -0.1, 0), Vec3(0, 0, 0.1), Vec3(0, 0, -0.1)};
+}
+void WriteOctahedronObj(const std::string& path) {
+  WriteObj(path, OctahedronVertices(),
+           {{1, 3, 5}, {3, 2, 5}, {2, 4, 5}, {4, 1, 5}, {3, 1, 6}, {2, 3, 6}, {4, 2, 6}, {1, 4, 6}});
+}
+
+// Coordinates as assimp holds them: single precision (ai_real is float in Debian's build).
+std::vector<Vec3> AsFloats(std::vector<Vec3> points) {
+  for (Vec3& p : points) p = p.cast<float>().cast<double>();
+  return points;
+}
+
+// A hexagonal prism (a cylinder-ish link): 12 vertices, 6 side quads and 2 caps.
+std::vector<Vec3> HexagonalPrismVertices() {
+  std::vector<Vec3> vertices;
+  for (double z : {-0.2, 0.2}) {
+    for (int k = 0; k < 6; ++k) vertices.emplace_back(0.05 * std::cos(k * kPi / 3), 0.05 * std::sin(k * kPi / 3), z);
+  }
+  return vertices;
+}
+void WriteHexagonalPrismObj(const std::string& path) {
+  std::vector<std::vector<int>> faces = {{1, 2, 3, 4, 5, 6}, {12, 11, 10, 9, 8, 7}};
+  for (int k = 0; k < 6; ++k) faces.push_back({k + 1, (k + 1) % 6 + 1, (k + 1) % 6 + 7, k + 7});
+  WriteObj(path, HexagonalPrismVertices(), faces);
+}
+
+// A temporary directory with the test meshes, and a ROS package 'test_robot_meshes' under it for package:// URIs.
+class RobotUrdf : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    char pattern[] = "/tmp/implicit_sim_robot_urdf_XXXXXX";
+    ASSERT_NE(::mkdtemp(pattern), nullptr);
+    dir_ = pattern;
+    fs::create_directories(dir_ + "/share/test_robot_meshes/meshes");
+    WriteBinaryStl(dir_ + "/box_binary.stl", BoxCorners(kHalf, kCentre));
+    WriteBinaryStl(dir_ + "/share/test_robot_meshes/meshes/box.stl", BoxCorners(kHalf, kCentre));
+    fs::create_directories(dir_ + "/share/robots/nested_meshes");  // a package one folder down, as in catkin src/
+    std::ofstream(dir_ + "/share/robots/nested_meshes/package.xml") << "<package/>";
+    WriteOctahedronObj(dir_ + "/share/robots/nested_meshes/octahedron.obj");
+    WriteAsciiStl(dir_ + "/box_ascii.stl", BoxCorners(kHalf, kCentre));
+    WriteOctahedronObj(dir_ + "/octahedron.obj");
+    WriteHexagonalPrismObj(dir_ + "/prism.obj");
+    WriteObj(dir_ + "/planar.obj", {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0), Vec3(0, 1, 0)}, {{1, 2, 3, 4}});
+    const char* old = std::getenv("ROS_PACKAGE_PATH");
+    had_package_path_ = old != nullptr;
+    old_package_path_ = old ? old : "";
+    ::setenv("ROS_PACKAGE_PATH", ("/nonexistent_dir:" + dir_ + "/share").c_str(), 1);
+  }
+  void TearDown() override {
+    if (had_package_path_) {
+      ::setenv("ROS_PACKAGE_PATH", old_package_path_.c_str(), 1);
+    } else {
+      ::unsetenv("ROS_PACKAGE_PATH");
+    }
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  // Writes the URDF into the temp dir and loads it with LoadSceneFromFile (relative meshes against the temp dir).
+  Model Load(const std::string& urdf, LoaderOptions options = LoaderOptions()) {
+    std::vector<std::string> warnings;
+    if (!options.warnings) options.warnings = &warnings;
+    const std::string path = dir_ + "/robot.urdf";
+    std::ofstream(path) << urdf;
+    Model model = LoadSceneFromFile(path, options);
+    if (options.warnings == &warnings) warnings_ = warnings;
+    return model;
+  }
+  std::string LoadError(const std::string& urdf) {
+    try {
+      Load(urdf);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "(loaded)";
+  }
+  std::string dir_;
+  std::vector<std::string> warnings_;
+
+ private:
+  bool had_package_path_ = false;
+  std::string old_package_path_;
+};
+
+const char* kArmInertial =
+    "<inertial><origin xyz='0.25 0 0'/><mass value='2'/>"
+    "<inertia ixx='0.01' iyy='0.05' izz='0.05' ixy='0' ixz='0' iyz='0'/></inertial>";
+
+// A small robot: root 'base_link' (a box), a revolute arm about y with a mesh collision, a visual-only link welded
+// to the base, a frame link 'tool0' and a weighted tip welded to the arm, and the usual extra elements.
+std::string Robot(const std::string& arm_mesh, const std::string& arm_inertial = kArmInertial,
+                  const std::string& base_inertial = "") {
+  return "<robot name='arm_robot'>"
+         "<material name='grey'><color rgba='0.5 0.5 0.5 1'/></material>"
+         "<link name='base_link'>" + base_inertial + "<visual><geometry><mesh filename='package://missing_pkg/base.dae'/></geometry>"
+         "<material name='grey'/></visual>"
+         "<collision><geometry><box size='0.2 0.2 0.1'/></geometry></collision></link>"
+         "<link name='camera'><visual><geometry><box size='0.05 0.05 0.05'/></geometry></visual></link>"
+         "<joint name='camera_joint' type='fixed'><parent link='base_link'/><child link='camera'/>"
+         "<origin xyz='0 0 0.3'/></joint>"
+         "<link name='arm'>" + arm_inertial +
+         "<visual><geometry><mesh filename='" + arm_mesh + "'/></geometry></visual>"
+         "<collision><origin xyz='0 0 0'/><geometry><mesh filename='" + arm_mesh + "'/></geometry></collision>"
+         "</link>"
+         "<joint name='shoulder' type='revolute'><parent link='base_link'/><child link='arm'/>"
+         "<origin xyz='0 0 0.5'/><axis xyz='0 1 0'/><limit lower='-3' upper='3' effort='100' velocity='5'/></joint>"
+         "<link name='tool0'/>"
+         "<joint name='tool_joint' type='fixed'><parent link='arm'/><child link='tool0'/>"
+         "<origin xyz='0.5 0 0'/></joint>"
+         "<link name='tip'><inertial><mass value='0.5'/>"
+         "<inertia ixx='0.001' iyy='0.001' izz='0.001' ixy='0' ixz='0' iyz='0'/></inertial>"
+         "<collision><geometry><sphere radius='0.03'/></geometry></collision></link>"
+         "<joint name='tip_joint' type='fixed'><parent link='tool0'/><child link='tip'/>"
+         "<origin xyz='0.05 0 0'/></joint>"
+         "<transmission name='shoulder_trans'><type>transmission_interface/SimpleTransmission</type>"
+         "<joint name='shoulder'><hardwareInterface>EffortJointInterface</hardwareInterface></joint></transmission>"
+         "<gazebo reference='arm'><material>Gazebo/Grey</material></gazebo>"
+         "</robot>";
+}
+
+// Every mesh vertex (given in the link frame: the collision origin is identity) satisfies every inequality of the
+// body's shape, and every face plane passes through at least 3 of them. Returns the number of faces.
+int ExpectHullOfVertices(const Body& body, const std::vector<Vec3>& vertices_L) {
+  const Pose X_SL = body.shape.X_BS.inverse() * body.X_BL;
+  std::vector<int> touching(body.shape.inequalities.size(), 0);
+  for (const Vec3& v_L : vertices_L) {
+    for (size_t i = 0; i < body.shape.inequalities.size(); ++i) {
+      const double f = body.shape.inequalities[i].Value(X_SL * v_L);  // m
+      EXPECT_LE(f, 1e-9) << "vertex " << v_L.transpose() << " outside face " << i;
+      touching[i] += std::abs(f) <= 1e-9;
+    }
+  }
+  for (size_t i = 0; i < touching.size(); ++i) EXPECT_GE(touching[i], 3) << "face " << i;
+  return static_cast<int>(body.shape.inequalities.size());
+}
+
+TEST_F(RobotUrdf, BinaryStlBoxBecomesSixFacesSpanningItsBoundingBox) {
+  const Model model = Load(Robot("box_binary.stl"));
+  const Body& arm = model.bodies[model.FindBody("arm")];
+  EXPECT_EQ(arm.shape.type, ShapeType::kIntersection);
+  EXPECT_EQ(ExpectHullOfVertices(arm, BoxCorners(kHalf, kCentre)), 6);
+  EXPECT_EQ(arm.shape.vertices.size(), 8u);
+  EXPECT_NEAR(arm.shape.BoundingRadius(), kHalf.norm(), 1e-12);  // S sits at the box's centre
+  // Support along the link axes: the bounding box of the mesh (world = link frame at the start: X_WL = X_WB X_BL).
+  const Pose X_WL = arm.X_WB0 * arm.X_BL, X_WB = arm.X_WB0;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (double sign : {1.0, -1.0}) {
+      Vec3 p_W;
+      ASSERT_TRUE(SupportPoint(arm.shape, X_WB, sign * (X_WL.linear() * Vec3::Unit(axis)), &p_W));
+      const Vec3 p_L = X_WL.inverse() * p_W;
+      EXPECT_NEAR(p_L[axis], kCentre[axis] + sign * kHalf[axis], 1e-12);
+    }
+  }
+  ASSERT_EQ(warnings_.size(), 1u);
+  EXPECT_EQ(warnings_[0],
+            "implicit_sim: link 'arm': collision mesh 'box_binary.stl' replaced by its convex hull (6 faces)");
+}
+
+TEST_F(RobotUrdf, AsciiStlObjOctahedronAndPrismHullsHaveTheirFaceCounts) {
+  const Model ascii = Load(Robot("box_ascii.stl"));
+  EXPECT_EQ(ExpectHullOfVertices(ascii.bodies[ascii.FindBody("arm")], BoxCorners(kHalf, kCentre)), 6);
+  const Model octahedron = Load(Robot("octahedron.obj"));
+  EXPECT_EQ(ExpectHullOfVertices(octahedron.bodies[octahedron.FindBody("arm")], OctahedronVertices()), 8);
+  const Model prism = Load(Robot("file://" + dir_ + "/prism.obj"));
+  EXPECT_EQ(ExpectHullOfVertices(prism.bodies[prism.FindBody("arm")], AsFloats(HexagonalPrismVertices())), 8);
+  ASSERT_EQ(warnings_.size(), 1u);
+  EXPECT_NE(warnings_[0].find("link 'arm'"), std::string::npos);
+  EXPECT_NE(warnings_[0].find("(8 faces)"), std::string::npos);
+}
+
+TEST_F(RobotUrdf, ScaleAndPackageUriThroughRosPackagePathAndTheResolver) {
+  const Model scaled = Load("<robot name='r'><link name='base'/><link name='arm'>" + std::string(kArmInertial) +
+                            "<collision><geometry><mesh filename='package://test_robot_meshes/meshes/box.stl' "
+                            "scale='2 1 0.5'/></geometry></collision></link>"
+                            "<joint name='j' type='continuous'><parent link='base'/><child link='arm'/>"
+                            "<axis xyz='0 0 1'/></joint></robot>");
+  std::vector<Vec3> corners = BoxCorners(kHalf, kCentre);
+  for (Vec3& c : corners) c = c.cwiseProduct(Vec3(2, 1, 0.5));
+  EXPECT_EQ(ExpectHullOfVertices(scaled.bodies[scaled.FindBody("arm")], corners), 6);
+
+  const Model nested = Load(Robot("package://nested_meshes/octahedron.obj"));
+  EXPECT_EQ(nested.bodies[nested.FindBody("arm")].shape.inequalities.size(), 8u);
+
+  LoaderOptions options;
+  std::vector<std::string> asked;
+  options.resolve_package_uri = [&](const std::string& uri) {
+    asked.push_back(uri);
+    return dir_ + "/octahedron.obj";
+  };
+  const Model resolved = Load(Robot("package://robot_description/meshes/arm.stl"), options);
+  EXPECT_EQ(resolved.bodies[resolved.FindBody("arm")].shape.inequalities.size(), 8u);
+  ASSERT_EQ(asked.size(), 1u);
+  EXPECT_EQ(asked[0], "package://robot_description/meshes/arm.stl");
+}
+
+TEST_F(RobotUrdf, TheRootIsFixedByDefaultAndFreeWhenFloating) {
+  const Model fixed = Load(Robot("box_binary.stl"));
+  // base_link, camera (visual only, welded), arm, tip; tool0 is a frame link on the moving arm: no body.
+  ASSERT_EQ(fixed.bodies.size(), 4u);
+  EXPECT_TRUE(fixed.bodies[fixed.FindBody("base_link")].is_fixed);
+  EXPECT_TRUE(fixed.bodies[fixed.FindBody("camera")].is_fixed);
+  EXPECT_TRUE(fixed.bodies[fixed.FindBody("camera")].shape.inequalities.empty());
+  EXPECT_EQ(fixed.FindBody("tool0"), -1);
+  EXPECT_EQ(fixed.num_moving(), 2);
+  ASSERT_EQ(fixed.joints.size(), 2u);
+  const Joint& shoulder = fixed.joints[fixed.FindJoint("shoulder")];
+  EXPECT_EQ(shoulder.parent, fixed.FindBody("base_link"));
+  const Joint& tip = fixed.joints[fixed.FindJoint("tip_joint")];
+  EXPECT_EQ(tip.type, JointType::kFixed);
+  EXPECT_EQ(tip.parent, fixed.FindBody("arm"));  // through tool0: the origins 0.5 and 0.05 m compose
+  const Pose X_WL_tip = fixed.bodies[fixed.FindBody("tip")].X_WB0;
+  EXPECT_TRUE(X_WL_tip.translation().isApprox(Vec3(0.55, 0, 0.5), 1e-12));
+  double drift_m = 1.0, drift_rad = 1.0;
+  JointDrift(fixed, State::Initial(fixed), &drift_m, &drift_rad);
+  EXPECT_LT(drift_m, 1e-12);
+  EXPECT_LT(drift_rad, 1e-12);
+
+  LoaderOptions floating;
+  floating.floating_root = true;
+  floating.X_W_root.translation() = Vec3(1, 2, 3);
+  const Model free = Load(Robot("box_binary.stl", kArmInertial, kArmInertial), floating);
+  const Body& base = free.bodies[free.FindBody("base_link")];
+  EXPECT_FALSE(base.is_fixed);
+  EXPECT_TRUE(base.X_WB0.translation().isApprox(Vec3(1.25, 2, 3)));  // its <inertial> origin is 0.25 m along x
+  // The massless visual-only camera now hangs on a moving link: a frame link, no body, like tool0.
+  EXPECT_EQ(free.FindBody("camera"), -1);
+  EXPECT_EQ(free.num_moving(), 3);
+  ASSERT_EQ(free.joints.size(), 2u);  // shoulder (parent: the free base) and tip_joint
+  EXPECT_EQ(free.joints[free.FindJoint("shoulder")].parent, free.FindBody("base_link"));
+  const Body& arm = free.bodies[free.FindBody("arm")];
+  EXPECT_TRUE((arm.X_WB0 * arm.X_BL).translation().isApprox(Vec3(1, 2, 3.5)));
+}
+
+TEST_F(RobotUrdf, TheArmSwingsDownUnderGravityFromTheFixedBase) {
+  const Model model = Load(Robot("box_binary.stl"));
+  StepperOptions options;
+  options.h = 0.005;
+  Data data(model);
+  State state = State::Initial(model);
+  const int shoulder = model.FindJoint("shoulder");
+  double worst_m = 0.0, worst_rad = 0.0;
+  for (int i = 0; i < 300; ++i) {
+    ASSERT_TRUE(Step(model, options, &state, &data).converged) << "step " << i;
+    double drift_m, drift_rad;
+    JointDrift(model, state, &drift_m, &drift_rad);
+    worst_m = std::max(worst_m, drift_m);
+    worst_rad = std::max(worst_rad, drift_rad);
+  }
+  // Horizontal at the start; about +y a downward swing of the +x arm is a positive angle.
+  const double angle = JointPosition(model, state, shoulder);
+  RecordProperty("shoulder_angle_rad", Scientific(angle));
+  RecordProperty("joint_drift_m", Scientific(worst_m));
+  RecordProperty("joint_drift_rad", Scientific(worst_rad));
+  EXPECT_GT(angle, 0.5);
+  EXPECT_LT(worst_m, 1e-6);
+  EXPECT_LT(worst_rad, 1e-6);
+  EXPECT_TRUE(state.X_WB(model, model.FindBody("base_link")).isApprox(model.bodies[0].X_WB0));
+}
+
+// A box dropped on a ground plane: as a URDF <box> and as a binary STL mesh of the same size.
+std::string DropScene(const std::string& collision_geometry, const std::string& collision_xyz = "0 0 0") {
+  return "<robot name='drop'><link name='world'/>"
+         "<link name='ground'><collision><geometry><box size='1 1 1'/></geometry><implicit type='halfspace'/>"
+         "</collision></link><joint name='g' type='fixed'><parent link='world'/><child link='ground'/></joint>"
+         "<link name='box'><inertial><mass value='1'/>"
+         "<inertia ixx='0.01' iyy='0.01' izz='0.01' ixy='0' ixz='0' iyz='0'/></inertial>"
+         "<collision><origin xyz='" + collision_xyz + "'/><geometry>" + collision_geometry + "</geometry></collision></link>"
+         "<joint name='b' type='floating'><parent link='world'/><child link='box'/><origin xyz='0.25 0 0.3'/>"
+         "</joint></robot>";
+}
+
+TEST_F(RobotUrdf, AMeshBoxRestsOnAPlaneAtTheHeightOfTheSameUrdfBox) {
+  // The mesh's centre is at kCentre in its frame: its collision origin -kCentre puts it where the URDF box is.
+  const Model mesh = Load(DropScene("<mesh filename='box_binary.stl'/>", "-0.25 0 0.125"));
+  const Model box = Load(DropScene("<box size='0.25 0.125 0.5'/>"));
+  double rest[2];
+  for (int m = 0; m < 2; ++m) {
+    const Model& model = m == 0 ? mesh : box;
+    Data data(model);
+    State state = State::Initial(model);
+    StepperOptions options;
+    for (int i = 0; i < 150; ++i) ASSERT_TRUE(Step(model, options, &state, &data).converged);
+    const Pose X_WB = state.X_WB(model, model.FindBody("box"));
+    Vec3 lowest;
+    ASSERT_TRUE(SupportPoint(model.bodies[1].shape, X_WB, -Vec3::UnitZ(), &lowest));
+    rest[m] = X_WB.translation().z();
+    EXPECT_NEAR(lowest.z(), 0.0, 1e-3);
+  }
+  RecordProperty("rest_height_m", Scientific(rest[0]));
+  RecordProperty("rest_height_difference_m", Scientific(rest[0] - rest[1]));
+  EXPECT_NEAR(rest[0], rest[1], 1e-6);
+  EXPECT_NEAR(rest[1], 0.25, 1e-3);
+}
+
+// A mesh box dropped onto a static mesh box: two polytopes, contact through the distance oracle over 12 planes.
+TEST_F(RobotUrdf, AMeshBoxRestsOnAStaticMeshBox) {
+  const std::string scene =
+      "<robot name='stack'><link name='table'><collision><origin xyz='-0.25 0 0.125'/>"
+      "<geometry><mesh filename='box_binary.stl'/></geometry></collision></link>"
+      "<link name='box'><inertial><mass value='1'/>"
+      "<inertia ixx='0.01' iyy='0.01' izz='0.01' ixy='0' ixz='0' iyz='0'/></inertial>"
+      "<collision><origin xyz='-0.25 0 0.125'/><geometry><mesh filename='box_ascii.stl'/></geometry></collision>"
+      "</link><joint name='drop' type='floating'><parent link='table'/><child link='box'/>"
+      "<origin xyz='0.02 0.01 0.52'/></joint></robot>";
+  // The root 'table' is not 'world', so a floating joint under it is refused ...
+  EXPECT_THROW(Load(scene), std::invalid_argument);
+  // ... and the same bodies under 'world' stack: the top box rests at 0.25 + 0.25 m above the table's centre.
+  const std::string world_scene = std::string(scene).replace(scene.find("<link name='table'>"), 0,
+                                                             "<link name='world'/><joint name='t' type='fixed'>"
+                                                             "<parent link='world'/><child link='table'/></joint>");
+  std::string fixed = world_scene;
+  fixed.replace(fixed.find("<parent link='table'/><child link='box'/>"), 41, "<parent link='world'/><child link='box'/>");
+  const Model model = Load(fixed);
+  EXPECT_EQ(model.pairs.size(), 1u);
+  Data data(model);
+  State state = State::Initial(model);
+  StepperOptions options;
+  for (int i = 0; i < 100; ++i) ASSERT_TRUE(Step(model, options, &state, &data).converged) << "step " << i;
+  const Pose X_WB = state.X_WB(model, model.FindBody("box"));
+  RecordProperty("stacked_height_m", Scientific(X_WB.translation().z()));
+  EXPECT_NEAR(X_WB.translation().z(), 0.5, 1e-4);
+  EXPECT_NEAR(X_WB.translation().x(), 0.02, 1e-4);
+  EXPECT_LT(std::abs(state.v.norm()), 1e-3);
+}
+
+TEST_F(RobotUrdf, AMeshAboveTheFaceCapIsSimplifiedAndTheWarningSaysSo) {
+  std::vector<Vec3> sphere;
+  for (int i = 0; i < 200; ++i) {
+    const double z = 1.0 - 2.0 * (i + 0.5) / 200, r = std::sqrt(1.0 - z * z), phi = i * kPi * (3.0 - std::sqrt(5.0));
+    sphere.push_back(0.1 * Vec3(r * std::cos(phi), r * std::sin(phi), z));
+  }
+  std::vector<std::vector<int>> strip;  // assimp keeps only the vertices that faces use
+  for (int k = 1; k + 2 <= 200; ++k) strip.push_back({k, k + 1, k + 2});
+  WriteObj(dir_ + "/sphere.obj", sphere, strip);
+  LoaderOptions options;
+  options.max_hull_faces = 20;
+  const Model model = Load(Robot("sphere.obj"), options);
+  const Body& arm = model.bodies[model.FindBody("arm")];
+  EXPECT_LE(arm.shape.inequalities.size(), 20u);
+  ASSERT_EQ(warnings_.size(), 1u);
+  RecordProperty("warning", warnings_[0]);
+  EXPECT_NE(warnings_[0].find("link 'arm': collision mesh 'sphere.obj' replaced by its convex hull (" +
+                              std::to_string(arm.shape.inequalities.size()) + " faces; simplified from 396 faces"),
+            std::string::npos)
+      << warnings_[0];
+  const Pose X_SL = arm.shape.X_BS.inverse() * arm.X_BL;
+  // Within 1e-8 m: assimp's OBJ number parser is not correctly rounded (about one float ulp at 0.1 m).
+  for (const Vec3& p : AsFloats(sphere)) {
+    for (const Inequality& q : arm.shape.inequalities) EXPECT_LE(q.Value(X_SL * p), 1e-8);
+  }
+}
+
+TEST_F(RobotUrdf, BadMeshesNameTheLinkAndTheFile) {
+  const std::string missing = LoadError(Robot("no_such_mesh.stl"));
+  EXPECT_NE(missing.find("link 'arm'"), std::string::npos) << missing;
+  EXPECT_NE(missing.find("no_such_mesh.stl"), std::string::npos) << missing;
+  EXPECT_NE(missing.find("does not exist"), std::string::npos) << missing;
+  const std::string planar = LoadError(Robot("planar.obj"));
+  EXPECT_NE(planar.find("link 'arm'"), std::string::npos) << planar;
+  EXPECT_NE(planar.find("planar.obj"), std::string::npos) << planar;
+  EXPECT_NE(planar.find("coplanar"), std::string::npos) << planar;
+  const std::string package = LoadError(Robot("package://no_such_package/meshes/arm.stl"));
+  EXPECT_NE(package.find("link 'arm'"), std::string::npos) << package;
+  EXPECT_NE(package.find("package://no_such_package/meshes/arm.stl"), std::string::npos) << package;
+  EXPECT_NE(package.find("not found"), std::string::npos) << package;
+  std::ofstream(dir_ + "/garbage.stl") << "not a mesh at all";
+  const std::string garbage = LoadError(Robot("garbage.stl"));
+  EXPECT_NE(garbage.find("link 'arm'"), std::string::npos) << garbage;
+  EXPECT_NE(garbage.find("garbage.stl"), std::string::npos) << garbage;
+  // A moving mesh link needs a mass: the existing error.
+  const std::string massless = LoadError(Robot("box_binary.stl", ""));
+  EXPECT_NE(massless.find("link 'arm': a moving link needs <inertial>"), std::string::npos) << massless;
+  // Nothing is warned about a load that fails.
+  EXPECT_TRUE(warnings_.empty());
+}
+
+TEST_F(RobotUrdf, TheWarningGoesToStderrWithoutAWarningsVector) {
+  const std::string path = dir_ + "/robot.urdf";
+  std::ofstream(path) << Robot("octahedron.obj");
+  ::testing::internal::CaptureStderr();
+  LoadSceneFromFile(path);
+  const std::string printed = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(printed, "implicit_sim: link 'arm': collision mesh 'octahedron.obj' replaced by its convex hull "
+                     "(8 faces)\n");
+}
+
+TEST_F(RobotUrdf, RootOptionsAreRefusedForAWorldRootAndOutOfRangeCaps) {
+  const std::string world_scene = DropScene("<box size='0.25 0.125 0.5'/>");
+  LoaderOptions floating;
+  floating.floating_root = true;
+  EXPECT_THROW(LoadSceneFromString(world_scene, "s", floating), std::invalid_argument);
+  LoaderOptions bad_cap;
+  bad_cap.max_hull_faces = 3;
+  try {
+    LoadSceneFromString(world_scene, "s", bad_cap);
+    ADD_FAILURE() << "accepted max_hull_faces = 3";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("max_hull_faces = 3 is out of range [4, 10000]"), std::string::npos);
+  }
+  LoaderOptions sheared;
+  sheared.X_W_root.linear()(0, 1) = 0.5;
+  EXPECT_THROW(Load(Robot("box_binary.stl"), sheared), std::invalid_argument);
+  // A floating root without <inertial>: the existing moving-link error names it.
+  const std::string robot = Robot("box_binary.stl");
+  try {
+    Load(robot, floating);
+    ADD_FAILURE() << "a massless floating root loaded";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("link 'base_link': a moving link needs <inertial>"), std::string::npos)
+        << e.what();
+  }
+}
+
+// Points on a sphere (radius 0.1 m): about 2 N triangles before the cap.
+std::vector<Vec3> SpherePoints(int count) {
+  std::vector<Vec3> points;
+  for (int i = 0; i < count; ++i) {
+    const double z = 1.0 - 2.0 * (i + 0.5) / count, r = std::sqrt(1.0 - z * z), phi = i * kPi * (3.0 - std::sqrt(5.0));
+    points.push_back(0.1 * Vec3(r * std::cos(phi), r * std::sin(phi), z));
+  }
+  return points;
+}
+
+TEST(ConvexHull, AHullAboveTheCapIsSimplifiedAndStillContainsEveryPoint) {
+  const std::vector<Vec3> points = SpherePoints(400);
+  const ConvexHull full = ComputeConvexHull(points, 10000);
+  EXPECT_EQ(full.merge_radius, 0.0);
+  EXPECT_EQ(full.faces.size(), 796u);  // a triangulated sphere: 2 V - 4
+  const ConvexHull capped = ComputeConvexHull(points, 64);
+  RecordProperty("capped_faces", std::to_string(capped.faces.size()));
+  RecordProperty("merge_radius_m", Scientific(capped.merge_radius));
+  EXPECT_LE(capped.faces.size(), 64u);
+  EXPECT_GE(capped.faces.size(), 8u);
+  EXPECT_EQ(capped.coplanar_faces, 796);
+  EXPECT_GT(capped.merge_radius, 0.0);
+  for (const Vec3& p : points) {
+    for (const HullFace& face : capped.faces) EXPECT_LE(face.normal.dot(p) - face.offset, 1e-12);
+  }
+  // The corners are the polytope's own: on at least 3 faces, inside all, and no farther out than 2 x the radius.
+  ASSERT_GE(capped.vertices.size(), 4u);
+  for (const Vec3& v : capped.vertices) {
+    int on = 0;
+    for (const HullFace& face : capped.faces) {
+      EXPECT_LE(face.normal.dot(v) - face.offset, 1e-9);
+      on += std::abs(face.normal.dot(v) - face.offset) <= 1e-9;
+    }
+    EXPECT_GE(on, 3);
+    EXPECT_LT(v.norm(), 0.2);
+  }
+}
+
+TEST(ConvexHull, RefusesFlatAndNonFiniteAndTooFewPoints) {
+  EXPECT_THROW(ComputeConvexHull({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, 64), std::invalid_argument);
+  EXPECT_THROW(ComputeConvexHull({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0)}, 64),
+               std::invalid_argument);
+  EXPECT_THROW(ComputeConvexHull({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, NAN)}, 64),
+               std::invalid_argument);
+  EXPECT_EQ(ComputeConvexHull({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)}, 64).faces.size(), 4u);
+}
+
+}  // namespace
+}  // namespace implicit_sim
