@@ -324,8 +324,11 @@ TEST(SceneEdit, RemovesASubtreeWithItsJointsAndEntries) {
   std::vector<std::string> removed;
   const std::string without_palm = RemoveFromScene(gripper, {"palm"}, &removed);
   EXPECT_EQ(removed, (std::vector<std::string>{"palm", "left_finger", "right_finger"}));
-  const std::string names = AttributeValues(without_palm);  // the comment still mentions the palm
-  for (const char* gone : {"palm", "finger", "lift", "slide"}) EXPECT_EQ(names.find(gone), std::string::npos) << gone;
+  const std::string values = " " + AttributeValues(without_palm);  // (the file's comment still mentions them)
+  for (const char* gone : {"palm", "left_finger", "right_finger", "lift", "left_slide", "right_slide"}) {
+    EXPECT_EQ(values.find(std::string(" ") + gone + " "), std::string::npos) << gone;
+  }
+  EXPECT_NE(values.find(" ball "), std::string::npos);
   const Model m = LoadSceneFromString(without_palm);
   EXPECT_EQ(BodyNames(m), std::vector<std::string>{"ball"});
   EXPECT_TRUE(m.joints.empty());
