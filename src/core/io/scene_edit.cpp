@@ -107,13 +107,14 @@ XMLElement* SimOf(XMLElement* robot, bool create) {
   return sim;
 }
 
-// The <implicit_sim><body link="..."> entry of `link`, or null.
-XMLElement* BodyEntry(XMLElement* sim, const std::string& link) {
-  for (XMLElement* e = sim ? sim->FirstChildElement("body") : nullptr; e; e = e->NextSiblingElement("body")) {
-    const char* name = e->Attribute("link");
-    if (name && link == name) return e;
+// The elements of a name: links by name, <implicit_sim><body> entries by link.
+std::map<std::string, XMLElement*> ByAttribute(XMLElement* parent, const char* tag, const char* attribute) {
+  std::map<std::string, XMLElement*> by_name;
+  for (XMLElement* e = parent ? parent->FirstChildElement(tag) : nullptr; e; e = e->NextSiblingElement(tag)) {
+    const char* name = e->Attribute(attribute);
+    if (name) by_name.emplace(name, e);
   }
-  return nullptr;
+  return by_name;
 }
 
 // The centre of mass of a link in its link frame, as the loader places it: the <inertial> origin, else (mass from
@@ -128,13 +129,6 @@ Vec3 CentreOfMassInLink(const XMLElement* link, const std::string& where) {
   return Vec3::Zero();
 }
 
-XMLElement* LinkNamed(XMLElement* robot, const std::string& name) {
-  for (XMLElement* link : ChildrenNamed(robot, "link")) {
-    if (name == link->Attribute("name")) return link;
-  }
-  return nullptr;
-}
-
 // A locked world axis (<body locked>) must keep zero velocity (the loader refuses anything else).
 void CheckLockedAxes(const XMLElement* entry, const Vec3& v, const Vec3& w, const std::string& where) {
   const char* locked = entry->Attribute("locked");
@@ -147,19 +141,22 @@ void CheckLockedAxes(const XMLElement* entry, const Vec3& v, const Vec3& w, cons
     if (axis == kAxes.end()) continue;  // the loader names a bad token
     const double speed = axis->second < 3 ? v[axis->second] : w[axis->second - 3];
     if (speed != 0.0) {
-      Fail(std::string(kAdd) + where + ": locked axis '" + token + "' would start moving (the spawn twist gives it " +
+      Fail(where + ": locked axis '" + token + "' would start moving (the spawn twist gives it " +
            Vec3Text(v) + " m/s, " + Vec3Text(w) + " rad/s)");
     }
   }
 }
 
 // The rigid motion of O added to the free body on `joint` (floating, parent world, origin already composed).
-void MoveFreeBody(XMLElement* robot, XMLElement* joint, const SceneAddition& a) {
+// `links` and `entries` index the addition's links and <body> entries by name.
+void MoveFreeBody(XMLElement* robot, XMLElement* joint, const SceneAddition& a,
+                  const std::map<std::string, XMLElement*>& links, const std::map<std::string, XMLElement*>& entries) {
   const std::string link_name = JointLink(joint, "child");
-  const std::string where = "addition link '" + link_name + "'";
+  const std::string where = std::string(kAdd) + "addition link '" + link_name + "'";
   const Pose X_WL = ReadOrigin(joint, where);
-  const Vec3 p_WB = X_WL * CentreOfMassInLink(LinkNamed(robot, link_name), where);
-  XMLElement* entry = BodyEntry(SimOf(robot, false), link_name);
+  const Vec3 p_WB = X_WL * CentreOfMassInLink(links.at(link_name), where);
+  const auto found = entries.find(link_name);
+  XMLElement* entry = found == entries.end() ? nullptr : found->second;
   const std::string at = where + " <implicit_sim><body>";
   const Mat3 R_WO = a.X_WO.linear();
   const Vec3 v = R_WO * ReadVec3(entry, "velocity", at, Vec3::Zero()) + a.v_WO +
@@ -179,12 +176,14 @@ void MoveFreeBody(XMLElement* robot, XMLElement* joint, const SceneAddition& a) 
 
 // Every origin of a joint to `world` becomes X_WO * origin; every free body gets the rigid motion of O.
 void PlaceInWorld(XMLElement* robot, const SceneAddition& a) {
+  const auto links = ByAttribute(robot, "link", "name");
+  const auto entries = ByAttribute(SimOf(robot, false), "body", "link");
   for (XMLElement* joint : ChildrenNamed(robot, "joint")) {
     if (JointLink(joint, "parent") != "world") continue;
     const std::string where = std::string(kAdd) + "addition joint '" + joint->Attribute("name") + "'";
     WriteOrigin(joint, a.X_WO * ReadOrigin(joint, where));
     const char* type = joint->Attribute("type");
-    if (type && std::string(type) == "floating") MoveFreeBody(robot, joint, a);
+    if (type && std::string(type) == "floating") MoveFreeBody(robot, joint, a, links, entries);
   }
 }
 
@@ -218,6 +217,9 @@ void RenameAll(XMLElement* robot, const std::string& prefix) {
     Rename(joint->FirstChildElement("mimic"), "joint", prefix, false);
   }
   XMLElement* sim = SimOf(robot, false);
+  if (sim && sim->NextSiblingElement("implicit_sim")) {
+    Fail(std::string(kAdd) + "the addition has more than one <implicit_sim>");
+  }
   for (XMLElement* e = sim ? sim->FirstChildElement() : nullptr; e; e = e->NextSiblingElement()) {
     const std::string tag = e->Name();
     if (tag == "friction") {
@@ -296,46 +298,51 @@ std::vector<std::string> Merge(XMLElement* scene, XMLElement* addition, const st
   return added_links;
 }
 
-// Removes the links in `roots`, their subtrees, the joints to and inside them, and the <implicit_sim> entries and
-// <gazebo reference> elements naming them. Returns the removed links in document order.
-std::vector<std::string> RemoveSubtrees(XMLElement* robot, const std::set<std::string>& roots) {
+// The links in `roots` and every link hanging on them through joints.
+std::set<std::string> SubtreeLinks(XMLElement* robot, const std::set<std::string>& roots) {
   const auto joints_by_parent = JointsByParent(robot);
   std::set<std::string> links = roots;
-  std::set<std::string> joints;
   std::vector<std::string> pending(roots.begin(), roots.end());
   while (!pending.empty()) {
-    const std::string parent = pending.back();
+    const auto children = joints_by_parent.find(pending.back());
     pending.pop_back();
-    const auto children = joints_by_parent.find(parent);
     if (children == joints_by_parent.end()) continue;
     for (XMLElement* joint : children->second) {
-      joints.insert(joint->Attribute("name"));
       const std::string child = JointLink(joint, "child");
       if (links.insert(child).second) pending.push_back(child);
     }
   }
-  std::vector<std::string> removed;
+  return links;
+}
+
+bool Names(const XMLElement* e, const char* attribute, const std::set<std::string>& names) {
+  const char* name = e->Attribute(attribute);
+  return name && names.count(name) > 0;
+}
+
+// Removes the links in `roots`, their subtrees, the joints to and inside them (every joint whose child goes), and the
+// <implicit_sim> entries and <gazebo reference> elements naming them. Returns the removed links in document order.
+std::vector<std::string> RemoveSubtrees(XMLElement* robot, const std::set<std::string>& roots) {
+  const std::set<std::string> links = SubtreeLinks(robot, roots);
+  std::set<std::string> joints;
   for (XMLElement* joint : ChildrenNamed(robot, "joint")) {
     if (links.count(JointLink(joint, "child"))) joints.insert(joint->Attribute("name"));
   }
-  const auto names = [](const XMLElement* e, const char* attribute, const std::set<std::string>& set) {
-    const char* name = e->Attribute(attribute);
-    return name && set.count(name) > 0;
-  };
+  std::vector<std::string> removed;
   std::vector<XMLElement*> doomed;
   for (XMLElement* e = robot->FirstChildElement(); e; e = e->NextSiblingElement()) {
     const std::string tag = e->Name();
-    if (tag == "link" && names(e, "name", links)) removed.push_back(e->Attribute("name"));
-    if ((tag == "link" && names(e, "name", links)) || (tag == "joint" && names(e, "name", joints)) ||
-        (tag == "gazebo" && names(e, "reference", links))) {
+    if (tag == "link" && Names(e, "name", links)) removed.push_back(e->Attribute("name"));
+    if ((tag == "link" && Names(e, "name", links)) || (tag == "joint" && Names(e, "name", joints)) ||
+        (tag == "gazebo" && Names(e, "reference", links))) {
       doomed.push_back(e);
     }
   }
   XMLElement* sim = SimOf(robot, false);
   for (XMLElement* e = sim ? sim->FirstChildElement() : nullptr; e; e = e->NextSiblingElement()) {
     const std::string tag = e->Name();
-    if (names(e, "link1", links) || names(e, "link2", links) || (tag == "body" && names(e, "link", links)) ||
-        (tag == "joint" && names(e, "name", joints))) {
+    if (Names(e, "link1", links) || Names(e, "link2", links) || (tag == "body" && Names(e, "link", links)) ||
+        (tag == "joint" && Names(e, "name", joints))) {
       doomed.push_back(e);
     }
   }
