@@ -111,7 +111,8 @@ Vec3 ReadVec3(const XMLElement* e, const char* name, const std::string& where, c
 }
 
 std::string Vec3Text(const Vec3& v) {
-  return FormatNumber(v[0]) + " " + FormatNumber(v[1]) + " " + FormatNumber(v[2]);
+  const Vec3 w = v + Vec3::Zero();  // -0 + 0 = +0: no "-0" in the text
+  return FormatNumber(w[0]) + " " + FormatNumber(w[1]) + " " + FormatNumber(w[2]);
 }
 
 Pose ReadOrigin(const XMLElement* e, const std::string& where) {

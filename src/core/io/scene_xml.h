@@ -34,7 +34,7 @@ std::map<std::string, std::vector<tinyxml2::XMLElement*>> JointsByParent(tinyxml
 
 // Attribute `name` of `e` as 3 finite numbers; `fallback` when absent. `where` names the element in errors.
 Vec3 ReadVec3(const tinyxml2::XMLElement* e, const char* name, const std::string& where, const Vec3& fallback);
-std::string Vec3Text(const Vec3& v);  // "x y z", shortest round-trip numbers
+std::string Vec3Text(const Vec3& v);  // "x y z", shortest round-trip numbers, "0" for -0
 
 // The pose given by the <origin xyz rpy> child of `e` (identity without one). Only xyz and rpy are accepted (the loader
 // refuses quat_xyzw, which urdfdom would ignore).

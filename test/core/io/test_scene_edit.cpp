@@ -194,6 +194,10 @@ TEST(SceneEdit, SpawnsTheP3SceneTwiceWithComposedPosesAndTwists) {
     EXPECT_EQ(PairOf(m, a->prefix + "ball", "ground").friction.e_r, 0.01);
   }
   EXPECT_EQ(AddToScene(ReadScene("cube_drop.urdf"), first, nullptr), once);  // deterministic
+  SceneAddition shifted = first;
+  shifted.X_WO = MakePose(0.0, Vec3::UnitZ(), Vec3(1, 2, 3));
+  const std::string text = AddToScene(ReadScene("cube_drop.urdf"), shifted, nullptr);
+  EXPECT_NE(text.find("<origin xyz=\"1 13.4 3\" rpy=\"0 0 0\"/>"), std::string::npos) << text;  // no "-0"
 }
 
 TEST(SceneEdit, SpawnRenamesFrictionPairsAndJointEntriesAndRotatesTheOwnTwist) {
