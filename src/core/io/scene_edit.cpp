@@ -50,15 +50,15 @@ std::set<std::string> NamesOf(XMLElement* robot, const char* tag) {
 }
 
 // A robot addition (no link `world`) gets the joint that attaches its single root link to `world`, at the identity
-// for now (composed with X_WO like every other top-level origin). Returns whether the addition is a robot.
-bool AttachRobotRoot(XMLElement* robot, bool floating_root) {
+// for now (composed with X_WO like every other top-level origin). A scene addition is left as it is.
+void AttachRobotRoot(XMLElement* robot, bool floating_root) {
   const std::set<std::string> links = NamesOf(robot, "link");
   std::set<std::string> roots = links;
   for (XMLElement* joint : ChildrenNamed(robot, "joint")) roots.erase(JointLink(joint, "child"));
   if (links.count("world")) {
     if (!roots.count("world")) Fail(std::string(kAdd) + "addition: link 'world' must be the root, not a child");
     if (links.size() == 1) Fail(std::string(kAdd) + "the addition has no link besides 'world'");
-    return false;
+    return;
   }
   if (links.empty()) Fail(std::string(kAdd) + "the addition has no link besides 'world'");
   if (roots.size() != 1) {
@@ -82,7 +82,6 @@ bool AttachRobotRoot(XMLElement* robot, bool floating_root) {
   XMLElement* root_link = robot->FirstChildElement("link");
   while (root != root_link->Attribute("name")) root_link = root_link->NextSiblingElement("link");
   robot->InsertAfterChild(root_link, joint);
-  return true;
 }
 
 // New link and joint names must not exist in the scene.
