@@ -524,7 +524,7 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
   return model;
 }
 
-Model LoadSceneFromFile(const std::string& path, const LoaderOptions& options) {
+std::string ReadSceneFile(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) Fail("scene file '" + path + "' is not a readable file");
   const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
@@ -537,6 +537,11 @@ Model LoadSceneFromFile(const std::string& path, const LoaderOptions& options) {
   if (!in) Fail("scene file '" + path + "' cannot be opened");
   std::ostringstream text;
   text << in.rdbuf();
+  return text.str();
+}
+
+Model LoadSceneFromFile(const std::string& path, const LoaderOptions& options) {
+  const std::string text = ReadSceneFile(path);
   std::string name = path.substr(path.find_last_of('/') + 1);
   if (name.size() > 5 && name.substr(name.size() - 5) == ".urdf") name.resize(name.size() - 5);
   LoaderOptions file_options = options;
@@ -544,7 +549,7 @@ Model LoadSceneFromFile(const std::string& path, const LoaderOptions& options) {
     file_options.mesh_directory = std::filesystem::path(path).parent_path().string();
     if (file_options.mesh_directory.empty()) file_options.mesh_directory = ".";
   }
-  return LoadSceneFromString(text.str(), name, file_options);
+  return LoadSceneFromString(text, name, file_options);
 }
 
 }  // namespace implicit_sim

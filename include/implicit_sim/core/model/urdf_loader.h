@@ -44,5 +44,8 @@ struct LoaderOptions {
 Model LoadSceneFromString(const std::string& urdf_xml, const std::string& scene_name = "scene",
                           const LoaderOptions& options = LoaderOptions());
 Model LoadSceneFromFile(const std::string& path, const LoaderOptions& options = LoaderOptions());
+// The text of a scene file, refused (std::invalid_argument naming the file) when it is not a readable regular file or
+// is larger than the loader's limit (32 MiB), before reading it.
+std::string ReadSceneFile(const std::string& path);
 
 }  // namespace implicit_sim
