@@ -85,6 +85,21 @@ void SimNode::AppendDragArrows(const Snapshot& snapshot, int shown, double size,
   }
 }
 
+void SimNode::AnnounceNewWorld(const Snapshot& snapshot, PublishMemory* memory) {
+  PublishStaticTf(*snapshot.model);
+  if (markers_pub_.getNumSubscribers() > 0) {
+    visualization_msgs::MarkerArray msg;
+    msg.markers.emplace_back();
+    msg.markers.back().action = visualization_msgs::Marker::DELETEALL;
+    const visualization_msgs::MarkerArray shapes = conv::ShapeMarkers(*snapshot.model);
+    msg.markers.insert(msg.markers.end(), shapes.markers.begin(), shapes.markers.end());
+    markers_pub_.publish(msg);
+  }
+  memory->shown_pairs.clear();
+  memory->shown_drag_arrows = 0;
+  SetUpDragMarkers(*snapshot.model, snapshot.state);
+}
+
 void SimNode::SendMarkers(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to) {
   visualization_msgs::MarkerArray msg = conv::ShapeMarkers(*snapshot.model);
   const LiveParams live = Live();

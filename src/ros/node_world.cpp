@@ -115,7 +115,7 @@ std::unique_ptr<SimNode::World> SimNode::BuildWorld(const SceneText& scene) cons
   std::vector<std::string> warnings;
   auto model = std::make_shared<const Model>(
       LoadSceneFromString(scene.urdf, scene.name, SceneLoaderOptions(scene.dir, &warnings)));
-  for (const std::string& warning : warnings) ROS_WARN("implicit_sim: %s", warning.c_str());
+  for (const std::string& warning : warnings) ROS_WARN("%s", warning.c_str());
   CheckWorldFrame(*model, params_.world_frame);
   auto world = std::make_unique<World>(std::move(model));
   world->urdf = scene.urdf;

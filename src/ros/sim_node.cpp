@@ -345,6 +345,7 @@ void SimNode::PublishLoop() {
     const std::shared_ptr<const Snapshot> latest = Latest();
     const Snapshot& snapshot = *latest;
     if (memory.model != snapshot.model) {  // a new world: its shapes and static frames, stale contacts deleted
+      if (memory.model) AnnounceNewWorld(snapshot, &memory);
       memory.model = snapshot.model;
       memory.on_tf.assign(snapshot.model->bodies.size(), 1);  // jointed links: to robot_state_publisher if asked
       for (const Joint& joint : snapshot.model->joints) memory.on_tf[joint.child] = params_.publish_joint_link_tf;

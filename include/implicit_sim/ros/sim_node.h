@@ -204,6 +204,7 @@ class SimNode {
   void PublishStaticTf(const Model& model);
   void PublishTf(const Snapshot& snapshot, const ros::Time& stamp, PublishMemory* memory);
   void PublishStateTopics(const Snapshot& snapshot, PublishMemory* memory);  // after a change of the state
+  void AnnounceNewWorld(const Snapshot& snapshot, PublishMemory* memory);    // static tf, shapes, drag markers
   void PublishContactMarkers(const Snapshot& snapshot, PublishMemory* memory);
   sensor_msgs::JointState JointStatesMsg(const Snapshot& snapshot) const;
   implicit_sim::Contacts ContactsMsg(const Snapshot& snapshot) const;

@@ -1,0 +1,204 @@
+#!/usr/bin/python3
+"""The open world (doc/ros_node.md#an-open-world) on the cube scene (test/ros/node_world.test, running at real time):
+- ~spawn adds bodies (all or nothing) that show on ~get_body_state, ~body_states, /tf and the shape markers; a name
+  that exists and an overlap are refused and change nothing;
+- ~delete removes bodies and their subtrees; an unknown name is refused;
+- ~load_scene replaces the world; a bad scene is refused with the loader's message and the old world keeps stepping;
+  files outside the allowed directories are refused without echoing them;
+- a robot URDF (root link not world, a mesh collision) loads with its root welded to the world, /joint_states follows
+  and robot_description holds its jointed part;
+- 100 spawn/delete cycles of a 10-body URDF: RSS after cycle 100 minus after cycle 10 below 2 MB, and the median service
+  latency of cycles 91-100 within 20 % of cycles 1-10 (the least of each window, paused: the calls' own cost)."""
+import os
+import statistics
+import struct
+import tempfile
+import time
+import unittest
+import xmlrpc.client
+
+import rosgraph
+import rospy
+import rostest
+from geometry_msgs.msg import Point, Pose, Quaternion, Twist, Vector3
+from implicit_sim.msg import BodyStates
+from implicit_sim.srv import Delete, GetBodyState, LoadScene, Spawn
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+from tf2_msgs.msg import TFMessage
+from visualization_msgs.msg import MarkerArray
+
+NODE = "/implicit_sim"
+SOURCE_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+
+def call(name, srv_type, *args):
+    rospy.wait_for_service(NODE + "/" + name, timeout=10)
+    return rospy.ServiceProxy(NODE + "/" + name, srv_type)(*args)
+
+
+def balls_urdf(n, spacing=0.15, height=0.5):
+    """A scene of n free spheres (r = 0.05 m, 0.1 kg) in a row along x at `height`."""
+    links = []
+    for i in range(n):
+        links.append(f"""
+  <link name="ball{i}">
+    <inertial><mass value="0.1"/><inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><geometry><sphere radius="0.05"/></geometry></collision>
+  </link>
+  <joint name="ball{i}_joint" type="floating">
+    <parent link="world"/><child link="ball{i}"/><origin xyz="{i * spacing} 0 {height}"/>
+  </joint>""")
+    return '<?xml version="1.0"?>\n<robot name="balls">\n  <link name="world"/>' + "".join(links) + "\n</robot>\n"
+
+
+def body_names():
+    return [b.name for b in rospy.wait_for_message(NODE + "/body_states", BodyStates, timeout=5).bodies]
+
+
+def node_rss_bytes():
+    uri = rosgraph.Master("/node_world").lookupNode(NODE)
+    _, _, pid = xmlrpc.client.ServerProxy(uri).getPid("/node_world")
+    with open("/proc/%d/status" % pid) as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) * 1024
+    return -1
+
+
+def pose(x, y, z):
+    return Pose(position=Point(x, y, z), orientation=Quaternion(0, 0, 0, 1))
+
+
+def write_box_stl(path, half):
+    """A binary STL of the box [-half, half]^3 (12 triangles)."""
+    corners = [(sx * half, sy * half, sz * half) for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
+    faces = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1), (2, 3, 7), (2, 7, 6), (0, 2, 6),
+             (0, 6, 4), (1, 5, 7), (1, 7, 3)]
+    with open(path, "wb") as f:
+        f.write(b"\0" * 80 + struct.pack("<I", len(faces)))
+        for face in faces:
+            f.write(struct.pack("<3f", 0, 0, 0))
+            for k in face:
+                f.write(struct.pack("<3f", *corners[k]))
+            f.write(struct.pack("<H", 0))
+
+
+class NodeWorld(unittest.TestCase):
+    def test_1_spawn_shows_the_bodies_and_refuses_clashes_and_overlaps(self):
+        before = body_names()
+        res = call("spawn", Spawn, balls_urdf(3), "", "a_", pose(0.0, 1.0, 0.0), Twist(), False)
+        self.assertTrue(res.success, res.message)
+        self.assertEqual(list(res.bodies), ["a_ball0", "a_ball1", "a_ball2"])
+        state = call("get_body_state", GetBodyState, "a_ball1").state
+        self.assertAlmostEqual(state.pose.position.x, 0.15, delta=0.02)
+        self.assertAlmostEqual(state.pose.position.y, 1.0, delta=1e-9)
+        self.assertEqual(body_names(), before[:1] + ["a_ball0", "a_ball1", "a_ball2"] + before[1:])
+        frames = set()
+        sub = rospy.Subscriber("/tf", TFMessage, lambda msg: frames.update(t.child_frame_id for t in msg.transforms))
+        time.sleep(1.0)
+        sub.unregister()
+        self.assertIn("a_ball2", frames)
+        shapes = []  # a new subscriber gets the shapes (in a message of their own or beside the contacts)
+        sub = rospy.Subscriber(NODE + "/markers", MarkerArray, lambda msg: shapes.extend(
+            m.id for m in msg.markers if m.ns == "shapes"))
+        time.sleep(1.0)
+        sub.unregister()
+        self.assertEqual(len(set(shapes)), len(before) + 3)
+
+        clash = call("spawn", Spawn, balls_urdf(1), "", "a_", pose(3.0, 3.0, 0.0), Twist(), False)
+        self.assertFalse(clash.success)
+        self.assertIn("a_ball0", clash.message)
+        cube = call("get_body_state", GetBodyState, "cube").state.pose.position
+        overlap = call("spawn", Spawn, balls_urdf(1), "", "b_", pose(cube.x, cube.y, cube.z - 0.5), Twist(), False)
+        self.assertFalse(overlap.success)
+        self.assertIn("overlap", overlap.message)
+        self.assertEqual(len(body_names()), len(before) + 3)
+
+    def test_2_delete_removes_bodies_and_refuses_unknown_names(self):
+        res = call("delete", Delete, ["a_ball0", "a_ball2"])
+        self.assertTrue(res.success, res.message)
+        self.assertEqual(sorted(res.deleted), ["a_ball0", "a_ball2"])
+        names = body_names()
+        self.assertNotIn("a_ball0", names)
+        self.assertIn("a_ball1", names)
+        unknown = call("delete", Delete, ["no_such_link"])
+        self.assertFalse(unknown.success)
+        self.assertIn("no_such_link", unknown.message)
+        self.assertEqual(body_names(), names)
+
+    def test_3_a_bad_scene_is_refused_and_the_world_keeps_stepping(self):
+        t0 = call("get_body_state", GetBodyState, "cube").message
+        bad = call("load_scene", LoadScene, "<robot name='x'><link name='world'/></robot>", "")
+        self.assertFalse(bad.success)
+        self.assertTrue(bad.message)
+        outside = call("load_scene", LoadScene, "", "/etc/passwd")
+        self.assertFalse(outside.success)
+        self.assertIn("not a file under", outside.message)
+        self.assertNotIn("root:", outside.message)
+        time.sleep(0.3)
+        self.assertNotEqual(call("get_body_state", GetBodyState, "cube").message, t0)  # time moved on
+        self.assertIn("a_ball1", body_names())
+
+    def test_4_a_robot_urdf_loads_with_its_root_welded_and_a_mesh_hull(self):
+        with tempfile.TemporaryDirectory() as directory:
+            mesh = os.path.join(directory, "link.stl")
+            write_box_stl(mesh, 0.05)
+            robot = f"""<?xml version="1.0"?>
+<robot name="arm">
+  <link name="base_link">
+    <collision><geometry><box size="0.2 0.2 0.1"/></geometry></collision>
+  </link>
+  <link name="upper">
+    <inertial><origin xyz="0 0 0.3"/><mass value="1"/>
+      <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><origin xyz="0 0 0.3"/><geometry><mesh filename="file://{mesh}"/></geometry></collision>
+  </link>
+  <joint name="shoulder" type="revolute">
+    <parent link="base_link"/><child link="upper"/><origin xyz="0 0 0.1"/><axis xyz="1 0 0"/>
+    <limit lower="-3" upper="3" effort="50" velocity="5"/>
+  </joint>
+</robot>"""
+            res = call("load_scene", LoadScene, robot, "")
+            self.assertTrue(res.success, res.message)
+        self.assertEqual(sorted(body_names()), ["base_link", "upper"])
+        joints = rospy.wait_for_message("/joint_states", JointState, timeout=5)
+        self.assertEqual(list(joints.name), ["shoulder"])
+        description = rospy.get_param("/robot_description")
+        self.assertIn('name="shoulder"', description)
+        self.assertNotIn("implicit_sim", description)
+        fixed = call("get_body_state", GetBodyState, "base_link").state.pose.position
+        self.assertEqual((fixed.x, fixed.y, fixed.z), (0.0, 0.0, 0.0))
+
+    def test_5_spawn_and_delete_cycles_leave_memory_and_latency_flat(self):
+        self.assertTrue(call("load_scene", LoadScene, "", "cube_drop").success)
+        self.assertTrue(call("pause", Trigger).success)  # the services' own cost, not the wait for a step
+        rospy.wait_for_service(NODE + "/spawn", timeout=10)
+        spawn = rospy.ServiceProxy(NODE + "/spawn", Spawn, persistent=True)
+        delete = rospy.ServiceProxy(NODE + "/delete", Delete, persistent=True)
+        urdf = balls_urdf(10)
+        latencies, rss = [], {}
+        for cycle in range(1, 101):
+            start = time.monotonic()
+            res = spawn(urdf, "", "c_", pose(1.0, 1.0, 0.0), Twist(), False)
+            self.assertTrue(res.success, res.message)
+            gone = delete(list(res.bodies))
+            self.assertTrue(gone.success, gone.message)
+            latencies.append(time.monotonic() - start)
+            if cycle in (10, 100):
+                time.sleep(0.5)
+                rss[cycle] = node_rss_bytes()
+        # The least of each window of 10 cycles: the calls' own cost, without the scheduling noise of a shared machine.
+        early, late = min(latencies[:10]), min(latencies[90:])
+        growth = rss[100] - rss[10]
+        print("[ INFO ] 100 spawn/delete cycles of 10 bodies: RSS %.1f MB after cycle 10, growth to cycle 100 %+.3f MB; "
+              "spawn+delete least %.2f ms (cycles 1-10), %.2f ms (91-100); median %.2f ms, %.2f ms"
+              % (rss[10] / 1e6, growth / 1e6, 1e3 * early, 1e3 * late, 1e3 * statistics.median(latencies[:10]),
+                 1e3 * statistics.median(latencies[90:])), flush=True)
+        self.assertLess(growth, 2e6)
+        self.assertLess(late, 1.2 * early)
+
+
+if __name__ == "__main__":
+    rospy.init_node("node_world")
+    rostest.rosrun("implicit_sim", "node_world", NodeWorld)
