@@ -141,6 +141,17 @@ bool CheckJointDrive(const Joint& joint, const JointDrive& drive, std::string* e
   return false;
 }
 
+double JointDrivePositionError(const Joint& joint, double position_target, double q) {
+  constexpr double kTwoPi = 6.28318530717958647692;
+  const bool angle = joint.type == JointType::kRevolute || joint.type == JointType::kContinuous;
+  return angle && !joint.limited ? std::remainder(position_target - q, kTwoPi) : position_target - q;
+}
+
+double JointDriveEffortAt(const Joint& joint, const JointDrive& drive, double q, double qdot) {
+  return ClampJointEffort(joint, drive.stiffness * JointDrivePositionError(joint, drive.position_target, q) +
+                                     drive.damping * (drive.velocity_target - qdot));
+}
+
 void AddJointEffortWrench(const Model& model, const State& state, const Eigen::VectorXd& efforts,
                           Eigen::VectorXd* wrench_W) {
   if (efforts.size() != static_cast<int>(model.joints.size()) || wrench_W->size() != model.nv()) {

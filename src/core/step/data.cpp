@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "implicit_sim/core/model/joints.h"
+
 namespace implicit_sim {
 
 IslandSolve::IslandSolve(const Model& model)
@@ -38,15 +40,22 @@ void Data::LayOut(const std::vector<int>& pairs_in_ncp, const Eigen::VectorXd* z
   contacts.resize(problem.blocks().size());
 }
 
-bool Data::LayOutDrives() {
+bool Data::LayOutDrives(const State& state) {
   bool changed = false;
   for (size_t j = 0; j < joint_drives.size(); ++j) {
     driven[j] = JointDriveActive(joint_drives[j]) && model_->joints[j].has_coordinate();
     changed = changed || driven[j] != problem.driven_joints()[j];
   }
   if (!changed) return false;
+  const std::vector<char> was_driven = problem.driven_joints();
   problem.SetDrivenJoints(driven, &z, &z_remap);
   z.swap(z_remap);
+  for (int j : problem.joints()) {
+    if (!driven[j] || was_driven[j]) continue;
+    const Joint& joint = model_->joints[j];
+    z[problem.joint_offset(j) + joint.size()] = JointDriveEffortAt(
+        joint, joint_drives[j], JointPosition(*model_, state, j), JointVelocity(*model_, state, j));
+  }
   return true;
 }
 

@@ -23,15 +23,6 @@
 namespace implicit_sim {
 namespace {
 
-constexpr double kTwoPi = 6.28318530717958647692;
-
-// position_target - q (rad or m); for a revolute or continuous joint without limits, whose position is an angle in
-// (-pi, pi] about its offset (joints.h), the shorter way round, in [-pi, pi].
-double PositionError(const Joint& joint, double position_target, double q) {
-  const bool angle = joint.type == JointType::kRevolute || joint.type == JointType::kContinuous;
-  return angle && !joint.limited ? std::remainder(position_target - q, kTwoPi) : position_target - q;
-}
-
 // mid(-E, E, P) with E = joint.effort_limit (P itself when E is 0), and its derivative by P.
 struct ClampedEffort {
   double value, slope;
@@ -84,7 +75,7 @@ void StepProblem::AddJointDriveRow(int j, int col, const Eigen::VectorXd& z, con
   const double q = JointPosition(joint, MakePose(eP.p, eP.R), MakePose(eC.p, eC.R), &g);  // end of step
   const double rate = G_q.Rate(eP.v, eP.w, eC.v, eC.w);
   const ClampedEffort target = ClampToEffortLimit(
-      joint, drive.stiffness * PositionError(joint, drive.position_target, q) +
+      joint, drive.stiffness * JointDrivePositionError(joint, drive.position_target, q) +
                  drive.damping * (drive.velocity_target - rate));
   const double inv_scale = 1.0 / DriveRowScale(drive);
   (*Phi)[col] = (z[col] - target.value) * inv_scale;
@@ -103,7 +94,7 @@ void StepProblem::AddJointDriveRowVelocityStage(int j, int col, const Eigen::Vec
   const double rate_gain = drive.damping + 0.5 * h_ * drive.stiffness;  // N m s/rad or N s/m
   const double rate = G_q.Rate(eP.v, eP.w, eC.v, eC.w);
   const ClampedEffort target = ClampToEffortLimit(
-      joint, drive.stiffness * PositionError(joint, drive.position_target, joint_q_end_[j]) +
+      joint, drive.stiffness * JointDrivePositionError(joint, drive.position_target, joint_q_end_[j]) +
                  rate_gain * (drive.velocity_target - rate));
   const double stage1 = stage1_z_[col];
   const double inv_scale = 1.0 / DriveRowScale(drive);

@@ -401,7 +401,7 @@ StepReport Step(const Model& model, const StepperOptions& options, State* state,
     report.fault = StepFault::kInitialOverlap;
     return report;
   }
-  data->LayOutDrives();
+  data->LayOutDrives(*state);
   data->problem.set_joint_drives(&data->joint_drives);
   data->state_backup = *state;
   const double t_end = state->t + options.h;

@@ -67,6 +67,11 @@ inline bool JointDriveActive(const JointDrive& drive) { return drive.stiffness !
 // coordinate (never a fixed joint) and a position target within [lower, upper] for a limited joint. Otherwise false,
 // with a message naming the joint in *error (if not null).
 bool CheckJointDrive(const Joint& joint, const JointDrive& drive, std::string* error);
+// position_target - q (rad or m); for a revolute or continuous joint without limits, whose position is an angle in
+// (-pi, pi] (JointPosition), the shorter way round, in [-pi, pi].
+double JointDrivePositionError(const Joint& joint, double position_target, double q);
+// The drive's effort (N m or N) at joint position q and rate qdot, clamped to +-joint.effort_limit when that is > 0.
+double JointDriveEffortAt(const Joint& joint, const JointDrive& drive, double q, double qdot);
 
 // Adds the wrench of joint efforts (one per model joint: N m for revolute and continuous joints, N for prismatic;
 // fixed joints take none) at the configuration of `state` to wrench_W (6 values per moving body slot: force, torque;

@@ -89,9 +89,10 @@ class Data {
   // Lays the problem and the solution vectors out for `pairs` (model pair indices, ascending), carrying z_old over
   // into z_remap (the blocks of new pairs are zero and listed in new_blocks).
   void LayOut(const std::vector<int>& pairs, const Eigen::VectorXd* z_old);
-  // Lays the problem out for the joints whose entry of joint_drives is active (a drive unknown each), carrying z over
-  // (a newly driven joint's effort starts at 0); returns whether the layout changed. Step calls it.
-  bool LayOutDrives();
+  // Lays the problem out for the joints whose entry of joint_drives is active (a drive unknown each), carrying z over;
+  // a newly driven joint's effort starts at the drive's effort in `state` (the start of the step). Returns whether
+  // the layout changed. Step calls it.
+  bool LayOutDrives(const State& state);
   // Levenberg-Marquardt fallbacks of every island's Newton solver so far.
   int lm_fallbacks() const;
 
