@@ -11,6 +11,7 @@
 
 #include "implicit_sim/core/base/thread_pool.h"
 #include "implicit_sim/core/geometry/broad_phase.h"
+#include "implicit_sim/core/model/joints.h"
 #include "implicit_sim/core/model/model.h"
 #include "implicit_sim/core/model/state.h"
 #include "implicit_sim/core/ncp/semismooth_newton.h"
