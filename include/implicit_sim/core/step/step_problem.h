@@ -117,9 +117,9 @@ class StepProblem final : public NcpProblem {
   int pattern_version() const override { return 3 * pattern_version_ + static_cast<int>(stage_); }
 
   // --- joint drives (joints.h, JointDrive; implemented in step_drives.cpp) ---
-  // Which joints carry a drive unknown, per model joint (a fixed joint never does). When that changes, the layout and
-  // pattern_version change: *z_new (not z_old) receives z_old in the new layout with the pairs and their tangent axes
-  // kept, a newly driven joint's effort 0 (zero everywhere without z_old).
+  // Which joints carry a drive unknown, per model joint (a fixed joint never does). Lays the problem out anew (a new
+  // pattern_version; callers skip an unchanged set): *z_new (not z_old) receives z_old in the new layout with the pairs
+  // and their tangent axes kept, a newly driven joint's effort 0 (zero everywhere without z_old).
   void SetDrivenJoints(const std::vector<char>& driven, const Eigen::VectorXd* z_old, Eigen::VectorXd* z_new);
   const std::vector<char>& driven_joints() const { return driven_; }
   // The drives the rows of driven joints read (one per model joint): set before evaluating, kept by pointer.
