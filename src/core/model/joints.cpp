@@ -118,6 +118,40 @@ double ClampJointEffort(const Joint& joint, double commanded) {
   return std::clamp(commanded, -limit, limit);
 }
 
+bool CheckJointDrive(const Joint& joint, const JointDrive& drive, std::string* error) {
+  std::string problem;
+  if (!std::isfinite(drive.position_target) || !std::isfinite(drive.velocity_target)) {
+    problem = "targets must be finite";
+  } else if (!(drive.stiffness >= 0.0 && drive.stiffness <= kMaxJointDriveGain) ||
+             !(drive.damping >= 0.0 && drive.damping <= kMaxJointDriveGain)) {
+    problem = "stiffness and damping must be in [0, 1e12] (kMaxJointDriveGain)";
+  } else if (JointDriveActive(drive) && !joint.has_coordinate()) {
+    problem = "a fixed joint cannot be driven";
+  } else if (JointDriveActive(drive) && joint.limited &&
+             !(drive.position_target >= joint.lower && drive.position_target <= joint.upper)) {
+    problem = "position target outside the joint limits [" + std::to_string(joint.lower) + ", " +
+              std::to_string(joint.upper) + "]";
+  }
+  if (problem.empty()) return true;
+  if (error) {
+    *error = "joint drive of joint '" + joint.name + "' refused: " + problem + " (position_target " +
+             std::to_string(drive.position_target) + ", velocity_target " + std::to_string(drive.velocity_target) +
+             ", stiffness " + std::to_string(drive.stiffness) + ", damping " + std::to_string(drive.damping) + ")";
+  }
+  return false;
+}
+
+double JointDrivePositionError(const Joint& joint, double position_target, double q) {
+  constexpr double kTwoPi = 6.28318530717958647692;
+  const bool angle = joint.type == JointType::kRevolute || joint.type == JointType::kContinuous;
+  return angle && !joint.limited ? std::remainder(position_target - q, kTwoPi) : position_target - q;
+}
+
+double JointDriveEffortAt(const Joint& joint, const JointDrive& drive, double q, double qdot) {
+  return ClampJointEffort(joint, drive.stiffness * JointDrivePositionError(joint, drive.position_target, q) +
+                                     drive.damping * (drive.velocity_target - qdot));
+}
+
 void AddJointEffortWrench(const Model& model, const State& state, const Eigen::VectorXd& efforts,
                           Eigen::VectorXd* wrench_W) {
   if (efforts.size() != static_cast<int>(model.joints.size()) || wrench_W->size() != model.nv()) {

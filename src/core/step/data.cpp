@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "implicit_sim/core/model/joints.h"
+
 namespace implicit_sim {
 
 IslandSolve::IslandSolve(const Model& model)
@@ -22,8 +24,11 @@ Data::Data(const Model& model, PairSelection selection)
       broad(MakeBroadPhase(model)),
       X_WB(model.bodies.size(), Pose::Identity()),
       inflation(model.bodies.size(), 0.0),
+      driven(model.joints.size(), 0),
+      joint_drives(model.joints.size()),
       contacts(problem.blocks().size()),
-      joint_limit_effort(model.joints.size(), 0.0) {
+      joint_limit_effort(model.joints.size(), 0.0),
+      joint_drive_effort(model.joints.size(), 0.0) {
   for (size_t c = 0; c < contacts.size(); ++c) contacts[c].pair = problem.blocks()[c].pair;
   problem.set_regular_separated_friction(true);
 }
@@ -33,6 +38,25 @@ Data::~Data() = default;
 void Data::LayOut(const std::vector<int>& pairs_in_ncp, const Eigen::VectorXd* z_old) {
   problem.SetActivePairs(pairs_in_ncp, z_old, &z_remap, &new_blocks);
   contacts.resize(problem.blocks().size());
+}
+
+bool Data::LayOutDrives(const State& state) {
+  bool changed = false;
+  for (size_t j = 0; j < joint_drives.size(); ++j) {
+    driven[j] = JointDriveActive(joint_drives[j]) && model_->joints[j].has_coordinate();
+    changed = changed || driven[j] != problem.driven_joints()[j];
+  }
+  if (!changed) return false;
+  const std::vector<char> was_driven = problem.driven_joints();
+  problem.SetDrivenJoints(driven, &z, &z_remap);
+  z.swap(z_remap);
+  for (int j : problem.joints()) {
+    if (!driven[j] || was_driven[j]) continue;
+    const Joint& joint = model_->joints[j];
+    z[problem.joint_offset(j) + joint.size()] = JointDriveEffortAt(
+        joint, joint_drives[j], JointPosition(*model_, state, j), JointVelocity(*model_, state, j));
+  }
+  return true;
 }
 
 int Data::lm_fallbacks() const {
@@ -49,6 +73,11 @@ void SaveWarmStart(const Data& data, WarmStart* out) {
   data.problem.ActivePairs(&out->pairs);
   out->z = data.z;
   out->tangent_axes = data.problem.tangent_axes();
+  out->driven_joints.clear();
+  const std::vector<char>& driven = data.problem.driven_joints();
+  for (size_t j = 0; j < driven.size(); ++j) {
+    if (driven[j]) out->driven_joints.push_back(static_cast<int>(j));
+  }
 }
 
 void RestoreWarmStart(const Model& model, const WarmStart& saved, Data* data) {
@@ -59,9 +88,21 @@ void RestoreWarmStart(const Model& model, const WarmStart& saved, Data* data) {
                           return p >= 0 && p < static_cast<int>(model.pairs.size());
                         }) &&
                         (data->broad_phase || saved.pairs.size() == model.pairs.size());
-  if (!pairs_ok || saved.tangent_axes.size() != saved.pairs.size()) {
-    throw std::invalid_argument("warm start does not belong to this model (pairs or tangent axes)");
+  const std::vector<int>& driven = saved.driven_joints;
+  const bool driven_ok = std::is_sorted(driven.begin(), driven.end()) &&
+                         std::adjacent_find(driven.begin(), driven.end()) == driven.end() &&
+                         std::all_of(driven.begin(), driven.end(), [&](int j) {
+                           return j >= 0 && j < static_cast<int>(model.joints.size()) &&
+                                  model.joints[j].has_coordinate();
+                         });
+  if (!pairs_ok || saved.tangent_axes.size() != saved.pairs.size() || !driven_ok) {
+    throw std::invalid_argument("warm start does not belong to this model (pairs, tangent axes or driven joints)");
   }
+  // The layout of saved.z; kept_driven: the layout of data->z, restored if saved.z does not fit.
+  const std::vector<char> kept_driven = data->problem.driven_joints();
+  std::fill(data->driven.begin(), data->driven.end(), 0);
+  for (int j : driven) data->driven[j] = 1;
+  if (data->driven != kept_driven) data->problem.SetDrivenJoints(data->driven, nullptr, &data->z_remap);
   if (data->broad_phase) {
     data->problem.ActivePairs(&data->pairs);
     data->LayOut(saved.pairs, nullptr);
@@ -69,6 +110,7 @@ void RestoreWarmStart(const Model& model, const WarmStart& saved, Data* data) {
   if (saved.z.size() != data->problem.size()) {
     const int expected = data->problem.size();
     if (data->broad_phase) data->LayOut(data->pairs, nullptr);  // back to the layout of data->z
+    if (data->driven != kept_driven) data->problem.SetDrivenJoints(kept_driven, nullptr, &data->z_remap);
     throw std::invalid_argument("warm start does not belong to this model: z has " + std::to_string(saved.z.size()) +
                                 " values, the step problem " + std::to_string(expected));
   }

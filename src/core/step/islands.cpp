@@ -42,7 +42,16 @@ void SizeWorkspace(IslandSolve* island) {
   for (Eigen::VectorXd& backup : island->z_backup) backup.setZero(n);
   island->contacts.resize(island->pairs.size());
   island->joint_limit_effort.assign(island->joints.size(), 0.0);
+  island->joint_drive_effort.assign(island->joints.size(), 0.0);
   island->axes_warm_failed.reserve(island->pairs.size());
+}
+
+// Whether the island's problem has the drive unknowns of the whole model's for the joints it will hold.
+bool SameDrivenJoints(const StepProblem& global, const IslandSolve& island) {
+  for (int j : island.next_joints) {
+    if (global.driven_joints()[j] != island.problem.driven_joints()[j]) return false;
+  }
+  return true;
 }
 
 }  // namespace
@@ -82,13 +91,15 @@ void PartitionIslands(const Model& model, Data* data) {
   }
   for (int i = 0; i < count; ++i) {
     IslandSolve& island = *data->islands[i];
-    if (island.next_slots == island.slots && island.next_joints == island.joints && island.next_pairs == island.pairs) {
+    if (island.next_slots == island.slots && island.next_joints == island.joints && island.next_pairs == island.pairs &&
+        SameDrivenJoints(data->problem, island)) {
       continue;
     }
     island.slots = island.next_slots;  // copies (not swaps), so that both keep their capacity
     island.joints = island.next_joints;
     island.pairs = island.next_pairs;
     Eigen::VectorXd unused;
+    island.problem.SetDrivenJoints(data->problem.driven_joints(), nullptr, &unused);
     island.problem.SetBodies(island.slots, island.joints);
     island.problem.SetActivePairs(island.pairs, nullptr, &unused, &island.new_blocks);
     SizeWorkspace(&island);
@@ -115,6 +126,7 @@ void GatherIsland(const Data& data, IslandSolve* island) {
   island->frame_known.resize(island->blocks.size());
   for (size_t c = 0; c < island->blocks.size(); ++c) island->frame_known[c] = data.frame_known[island->blocks[c]];
   island->has_warm_start = data.has_warm_start;
+  local.set_joint_drives(&data.joint_drives);
 }
 
 void ScatterIsland(const IslandSolve& island, Data* data) {
@@ -128,6 +140,7 @@ void ScatterIsland(const IslandSolve& island, Data* data) {
     const int size = global.joint_size(j);
     data->z.segment(global.joint_offset(j), size) = island.z.segment(local.joint_offset(j), size);
     data->joint_limit_effort[j] = island.joint_limit_effort[i];
+    data->joint_drive_effort[j] = island.joint_drive_effort[i];
   }
   for (size_t c = 0; c < island.blocks.size(); ++c) {
     const PairBlock& from = local.blocks()[c];

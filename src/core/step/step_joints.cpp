@@ -44,7 +44,7 @@ void StepProblem::SeedJoints(Eigen::VectorXd* z) const {
   for (int j : joints_) {
     const Joint& joint = model_.joints[j];
     const int o = joint_offset_[j];
-    z->segment(o, joint.size()).setZero();
+    z->segment(o, joint_size(j)).setZero();
     if (!(joint.friction > 0.0)) continue;
     const JointBodies& jb = joint_bodies_[j];
     const BodyStep& c = start_[jb.child];
@@ -121,6 +121,7 @@ void StepProblem::AddJointRows(const Eigen::VectorXd& z, Eigen::VectorXd* Phi) c
     if (joint.limited) AddJointLimitRows(joint, o + m, z, eP, eC, G_q, Phi);
     if (joint.friction > 0.0) AddJointFrictionRows(joint, o + m + (joint.limited ? 2 : 0), z, eP, eC, G_q, Phi);
     if (joint.damping > 0.0) AddJointDamping(joint, eP, eC, G_q, Phi);
+    if (driven_[j]) AddJointDriveRow(j, o + joint.size(), z, eP, eC, G_q, Phi);
   }
 }
 

@@ -19,6 +19,8 @@ StepProblem::StepProblem(const Model& model, bool all_pairs, bool all_bodies)
   joint_equality_end_.resize(model.joints.size());
   joint_position_end_.resize(model.joints.size());
   limit_closed_.assign(model.joints.size(), {0, 0});
+  joint_q_end_.assign(model.joints.size(), 0.0);
+  driven_.assign(model.joints.size(), 0);
   for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
     if (model.velocity_slot[b] < 0) fixed_bodies_.push_back(b);
   }
@@ -59,18 +61,24 @@ void StepProblem::SetBodies(const std::vector<int>& slots, const std::vector<int
     end_[local].col = static_cast<int>(6 * s);
     for (int r = 0; r < 6; ++r) locked_row_[6 * s + r] = model.bodies[b].locked[r];
   }
-  pair_base_ = static_cast<int>(6 * slots_.size());
-  std::fill(joint_offset_.begin(), joint_offset_.end(), -1);
+  LayOutJoints();
   for (int j : joints_) {
     const Joint& joint = model.joints[j];
-    joint_offset_[j] = pair_base_;
-    pair_base_ += joint.size();
     joint_bodies_[j].parent = joint.parent < 0 ? -1 : LocalBody(joint.parent);
     joint_bodies_[j].child = LocalBody(joint.child);
   }
   std::vector<int> new_blocks;
   Eigen::VectorXd z;
   SetActivePairs({}, nullptr, &z, &new_blocks);
+}
+
+void StepProblem::LayOutJoints() {
+  pair_base_ = static_cast<int>(6 * slots_.size());
+  std::fill(joint_offset_.begin(), joint_offset_.end(), -1);
+  for (int j : joints_) {
+    joint_offset_[j] = pair_base_;
+    pair_base_ += joint_size(j);
+  }
 }
 
 int StepProblem::LocalBody(int body) const {

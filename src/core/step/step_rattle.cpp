@@ -11,7 +11,8 @@
 // where F1, torsion1 are stage 1's force and torsion vector: the step's impulse is h (F1 + F2), inside the friction
 // ellipsoid of the total. An open pair keeps its stage-1 values (Ln = ln1, S = s1, sigma = sigma1: no stage-2 force).
 // Joints: the equalities' rates G_i(q1) . nu1 = 0 with multipliers along G_i(q1); a closed limit 0 <= L _|_ rate;
-// friction on the total fraction S; half the damping and effort, as in stage 1.
+// friction on the total fraction S; half the damping and effort, as in stage 1; a drive's step-average effort
+// (step_drives.cpp).
 #include <algorithm>
 #include <cmath>
 
@@ -184,6 +185,7 @@ void StepProblem::BeginVelocityStage(const Eigen::VectorXd& z1, const Eigen::Vec
     const Pose X_WP = MakePose(eP.p, eP.R), X_WC = MakePose(eC.p, eC.R);
     for (int i = 0; i < joint.num_equalities(); ++i) JointEquality(joint, i, X_WP, X_WC, &joint_equality_end_[j][i]);
     const double q = JointPosition(joint, X_WP, X_WC, &joint_position_end_[j]);
+    joint_q_end_[j] = q;
     if (!joint.limited) continue;
     const int col = joint_offset_[j] + joint.num_equalities();
     const double distance[2] = {q - joint.lower, joint.upper - q};
@@ -374,6 +376,7 @@ void StepProblem::AddJointRowsVelocityStage(const Eigen::VectorXd& z, Eigen::Vec
       AddJointForce(G_q, joint.friction * (S - 0.5 * stage1_z_[col]), col, joint.friction, eP, eC, Phi);
     }
     if (joint.damping > 0.0) AddJointDamping(joint, eP, eC, G_q, Phi);
+    if (driven_[j]) AddJointDriveRowVelocityStage(j, o + joint.size(), z, eP, eC, G_q, Phi);
   }
 }
 

@@ -260,6 +260,7 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
   problem.Contacts(z_velocity, &island->contacts);
   for (size_t i = 0; i < island->joints.size(); ++i) {
     island->joint_limit_effort[i] = problem.JointLimitEffort(z_velocity, island->joints[i]);
+    island->joint_drive_effort[i] = problem.JointDriveEffort(z_velocity, island->joints[i]);
   }
   problem.set_stage(rattle ? StepStage::kPosition : StepStage::kWhole);
   WriteState(model, problem, island->z, z_velocity, state);
@@ -360,6 +361,19 @@ bool Advance(const Model& model, const StepperOptions& options, const Eigen::Vec
   }
 }
 
+// Throws std::invalid_argument naming the joint if Data::joint_drives does not hold a valid drive per model joint.
+void CheckJointDrives(const Model& model, const Data& data) {
+  if (data.joint_drives.size() != model.joints.size()) {
+    throw std::invalid_argument("Data::joint_drives must hold one drive per model joint (" +
+                                std::to_string(model.joints.size()) + "), got " +
+                                std::to_string(data.joint_drives.size()));
+  }
+  std::string error;
+  for (size_t j = 0; j < model.joints.size(); ++j) {
+    if (!CheckJointDrive(model.joints[j], data.joint_drives[j], &error)) throw std::invalid_argument(error);
+  }
+}
+
 }  // namespace
 
 StepReport Step(const Model& model, const StepperOptions& options, State* state, Data* data,
@@ -377,6 +391,7 @@ StepReport Step(const Model& model, const StepperOptions& options, State* state,
     throw std::invalid_argument("external wrench vector must hold " + std::to_string(model.nv()) +
                                 " finite values (force, torque per moving body)");
   }
+  CheckJointDrives(model, *data);
   const auto wall_start = std::chrono::steady_clock::now();
   StepReport report;
   report.converged = true;
@@ -386,6 +401,8 @@ StepReport Step(const Model& model, const StepperOptions& options, State* state,
     report.fault = StepFault::kInitialOverlap;
     return report;
   }
+  data->LayOutDrives(*state);
+  data->problem.set_joint_drives(&data->joint_drives);
   data->state_backup = *state;
   const double t_end = state->t + options.h;
   report.advanced = Advance(model, options, external_wrench_W, state, data, &report);

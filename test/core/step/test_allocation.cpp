@@ -81,6 +81,37 @@ TEST(Allocation, AThousandWarmStepsAllocateNothing) {
   }
 }
 
+// Joint drives (step_drives.cpp) whose targets change every step, on the gripper: the drive unknowns stay in the
+// layout, so a warm step allocates nothing either.
+TEST(Allocation, AThousandWarmStepsWithJointDrivesAllocateNothing) {
+  const Model model = LoadSceneFromFile(testing_support::ScenePath("gripper_lift.urdf"));
+  const int lift = model.FindJoint("lift"), left = model.FindJoint("left_slide"), right = model.FindJoint("right_slide");
+  for (const auto scheme : {StepperOptions::Scheme::kPaper, StepperOptions::Scheme::kRattle}) {
+    SCOPED_TRACE(scheme == StepperOptions::Scheme::kRattle ? "rattle" : "paper");
+    Data data(model);
+    State state = State::Initial(model);
+    StepperOptions options;
+    options.scheme = scheme;
+    options.h = 0.001;
+    auto drive = [&](int i) {
+      data.joint_drives[left] = {0.01, 0.0, 1e3, 5.0};
+      data.joint_drives[right] = {-0.01, 0.0, 1e3, 5.0};
+      data.joint_drives[lift] = {0.01 * std::sin(0.01 * i), 0.01 * std::cos(0.01 * i), 2000.0, 60.0};
+    };
+    drive(0);
+    Step(model, options, &state, &data);  // cold, and lays the drive unknowns out
+    const long before = g_allocations.load();
+    int iterations = 0;
+    for (int i = 1; i <= 1000; ++i) {
+      drive(i);
+      iterations += Step(model, options, &state, &data).iterations;
+    }
+    EXPECT_EQ(g_allocations.load() - before, 0);
+    EXPECT_GE(iterations, 1000);
+    EXPECT_NE(data.joint_drive_effort[lift], 0.0);
+  }
+}
+
 TEST(Allocation, AWarmSparseStepWithAnUnchangedPairSetAllocatesNothing) {
   // Broad phase, sparse Jacobian and KLU: once the pile rests, the pairs in the NCP stay the same and a step reuses
   // the recorded pattern, the symbolic analysis and every buffer.

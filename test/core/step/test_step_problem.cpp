@@ -38,14 +38,23 @@ Eigen::VectorXd BeginAtRandomPoint(const Model& model, unsigned seed, const Eige
 // of the sparse solver (set_regular_separated_friction), and the dense Jacobian must equal it entry for entry.
 // With a RATTLE stage (step_rattle.cpp): stage 1 with start frames from another random point for every other pair (the
 // rest on the end frame); stage 2 after BeginVelocityStage from the random point, at a point near its initial guess.
+// With drives (one per model joint), the joints whose drive is active carry a drive row.
 void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, bool sparse = false,
                                             bool projected = false, double proximal_weight = 0.0,
-                                            StepStage stage = StepStage::kWhole) {
+                                            StepStage stage = StepStage::kWhole,
+                                            const std::vector<JointDrive>* drives = nullptr) {
   NcpEvalMode mode;
   mode.project_multipliers = projected;
   Eigen::VectorXd center;
   StepProblem problem(model);
   problem.set_regular_separated_friction(sparse);
+  if (drives) {
+    std::vector<char> driven(model.joints.size());
+    for (size_t j = 0; j < driven.size(); ++j) driven[j] = JointDriveActive((*drives)[j]);
+    Eigen::VectorXd unused;
+    problem.SetDrivenJoints(driven, nullptr, &unused);
+    problem.set_joint_drives(drives);
+  }
   const Eigen::VectorXd wrench = Eigen::VectorXd::Constant(model.nv(), 0.3);
   Eigen::VectorXd z = BeginAtRandomPoint(model, seed, &wrench, &problem);
   if (stage != StepStage::kWhole) {
@@ -164,6 +173,29 @@ TEST(StepProblemJacobian, JointsOfEveryTypeWithLimitsFrictionAndDamping) {
 
 // Projected multipliers (the retry ladder's rung 1b): the friction rows' slip speed max(sigma, 0), whose derivative
 // is 0 where the random point has sigma < 0.
+// Drive rows (step_drives.cpp) on the revolute, prismatic and continuous joints of the jointed robot, in every stage,
+// dense and sparse: with no effort limit (the law's slope 1) and with limits the law exceeds at the random point (the
+// clamp's slope 0), one joint of each.
+TEST(StepProblemJacobian, JointDriveRowsInEveryStage) {
+  Model model = test_models::JointedRobot();
+  const int shoulder = model.FindJoint("shoulder"), slide = model.FindJoint("slide"), axle = model.FindJoint("axle");
+  std::vector<JointDrive> drives(model.joints.size());
+  drives[shoulder] = {0.7, 0.3, 40.0, 2.0};
+  drives[slide] = {0.05, -0.2, 300.0, 0.0};
+  drives[axle] = {2.5, 1.5, 0.0, 4.0};
+  unsigned seed = 40;
+  for (const double limit : {0.0, 1e-3}) {
+    model.joints[shoulder].effort_limit = model.joints[slide].effort_limit = model.joints[axle].effort_limit = limit;
+    for (const StepStage stage : {StepStage::kWhole, StepStage::kPosition, StepStage::kVelocity}) {
+      for (const bool sparse : {false, true}) {
+        SCOPED_TRACE("effort limit " + std::to_string(limit) + ", stage " + std::to_string(static_cast<int>(stage)) +
+                     (sparse ? ", sparse" : ", dense"));
+        ExpectJacobianMatchesFiniteDifferences(model, ++seed, sparse, false, 0.0, stage, &drives);
+      }
+    }
+  }
+}
+
 TEST(StepProblemJacobian, ProjectedMultipliers) {
   ExpectJacobianMatchesFiniteDifferences(test_models::SphereOnTwoSpheres(), 14, true, true);
   ExpectJacobianMatchesFiniteDifferences(test_models::BoxAndSuperellipsoid(), 15, false, true);

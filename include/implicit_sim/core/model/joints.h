@@ -11,6 +11,8 @@
 // (m), fixed 0.
 #pragma once
 
+#include <string>
+
 #include <Eigen/Core>
 
 #include "implicit_sim/core/model/model.h"
@@ -45,6 +47,31 @@ void JointDrift(const Model& model, const State& state, double* position_m, doub
 
 // A commanded effort (N m or N) clamped to +-joint.effort_limit when that is > 0.
 double ClampJointEffort(const Joint& joint, double commanded);
+
+// A PD drive of one joint (MuJoCo's position and velocity actuators, Gazebo's and PhysX's joint drives), one per model
+// joint in Data::joint_drives. The step evaluates it implicitly, at the END of the step (StepProblem, step_drives.cpp):
+//   tau = clamp(stiffness (position_target - q) + damping (velocity_target - qdot), -E, E)
+// with q, qdot the end-of-step joint position and rate, E = Joint::effort_limit (no clamp when it is 0), so that it is
+// stable at any gain. It adds to a commanded effort (AddJointEffortWrench) and to the joint's own damping. Inactive
+// when stiffness == 0 and damping == 0 (JointDriveActive).
+struct JointDrive {            // one per model joint; inactive when stiffness == 0 and damping == 0
+  double position_target = 0;  // rad or m
+  double velocity_target = 0;  // rad/s or m/s
+  double stiffness = 0;        // kp >= 0: N m/rad or N/m
+  double damping = 0;          // kd >= 0: N m s/rad or N s/m
+};
+// The largest stiffness (N m/rad or N/m) and damping (N m s/rad or N s/m) CheckJointDrive accepts.
+constexpr double kMaxJointDriveGain = 1e12;
+inline bool JointDriveActive(const JointDrive& drive) { return drive.stiffness != 0.0 || drive.damping != 0.0; }
+// Whether `drive` is valid for `joint`: finite targets, gains in [0, kMaxJointDriveGain], and if active a joint with a
+// coordinate (never a fixed joint) and a position target within [lower, upper] for a limited joint. Otherwise false,
+// with a message naming the joint in *error (if not null).
+bool CheckJointDrive(const Joint& joint, const JointDrive& drive, std::string* error);
+// position_target - q (rad or m); for a revolute or continuous joint without limits, whose position is an angle in
+// (-pi, pi] (JointPosition), the shorter way round, in [-pi, pi].
+double JointDrivePositionError(const Joint& joint, double position_target, double q);
+// The drive's effort (N m or N) at joint position q and rate qdot, clamped to +-joint.effort_limit when that is > 0.
+double JointDriveEffortAt(const Joint& joint, const JointDrive& drive, double q, double qdot);
 
 // Adds the wrench of joint efforts (one per model joint: N m for revolute and continuous joints, N for prismatic;
 // fixed joints take none) at the configuration of `state` to wrench_W (6 values per moving body slot: force, torque;

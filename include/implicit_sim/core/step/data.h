@@ -11,6 +11,7 @@
 
 #include "implicit_sim/core/base/thread_pool.h"
 #include "implicit_sim/core/geometry/broad_phase.h"
+#include "implicit_sim/core/model/joints.h"
 #include "implicit_sim/core/model/model.h"
 #include "implicit_sim/core/model/state.h"
 #include "implicit_sim/core/ncp/semismooth_newton.h"
@@ -71,6 +72,7 @@ struct IslandSolve {
   bool advanced = false;
   std::vector<ContactResult> contacts;  // one per pair, in the order of `pairs`
   std::vector<double> joint_limit_effort;  // one per joint, in the order of `joints` (see Data::joint_limit_effort)
+  std::vector<double> joint_drive_effort;  // one per joint, in the order of `joints` (see Data::joint_drive_effort)
 };
 
 class Data {
@@ -88,6 +90,10 @@ class Data {
   // Lays the problem and the solution vectors out for `pairs` (model pair indices, ascending), carrying z_old over
   // into z_remap (the blocks of new pairs are zero and listed in new_blocks).
   void LayOut(const std::vector<int>& pairs, const Eigen::VectorXd* z_old);
+  // Lays the problem out for the joints whose entry of joint_drives is active (a drive unknown each), carrying z over;
+  // a newly driven joint's effort starts at the drive's effort in `state` (the start of the step). Returns whether
+  // the layout changed. Step calls it.
+  bool LayOutDrives(const State& state);
   // Levenberg-Marquardt fallbacks of every island's Newton solver so far.
   int lm_fallbacks() const;
 
@@ -116,6 +122,11 @@ class Data {
   Eigen::VectorXd z_remap;
   // RATTLE: per pair of the NCP, whether z holds its closest points at the start of the step (see IslandSolve).
   std::vector<char> frame_known;
+  std::vector<char> driven;  // LayOutDrives' workspace: per model joint, whether its drive is active
+  // --- input: one PD drive per model joint (joints.h, JointDrive), all inactive as built; set them before Step, like
+  // MuJoCo's mjData.ctrl. Step refuses invalid ones (CheckJointDrive). Turning drives on or off changes the layout of
+  // z (LayOutDrives); the warm start is carried over. ---
+  std::vector<JointDrive> joint_drives;
   // --- outputs: the contact results of the last step, one per pair in its NCP (contacts[i].pair is the model
   // pair). With every pair in the NCP, contacts[c] belongs to model pair c. ---
   std::vector<ContactResult> contacts;
@@ -123,17 +134,22 @@ class Data {
   // position; 0 for a joint without limits or not yet stepped), one per model joint (StepProblem::JointLimitEffort of
   // the step's solution: with the RATTLE scheme, its total over both stages).
   std::vector<double> joint_limit_effort;
+  // The effort each joint's drive applied in the last step (N m or N, positive towards increasing position; 0 for a
+  // joint without an active drive or not yet stepped), one per model joint: with the RATTLE scheme the step's average
+  // over both stages (StepProblem::JointDriveEffort).
+  std::vector<double> joint_drive_effort;
 };
 
-// Everything a step reads besides the State: whether there is a warm start, the previous solution z (velocities,
-// closest points, normals, multipliers), the pairs z is laid out for and the friction tangent axes. A step is a
-// function of (State, WarmStart) alone (the sparse LU chooses its pivots afresh in every solve), so saving both and
-// restoring them continues a run bit-identically.
+// Everything a step reads besides the State and the drives (Data::joint_drives): whether there is a warm start, the
+// previous solution z (velocities, closest points, normals, multipliers, drive efforts), the pairs and driven joints
+// z is laid out for and the friction tangent axes. A step is a function of (State, WarmStart, drives) alone (the sparse
+// LU chooses its pivots afresh in every solve), so saving them and restoring them continues a run bit-identically.
 struct WarmStart {
   bool valid = false;
   std::vector<int> pairs;  // model pair indices, ascending
   Eigen::VectorXd z;
   std::vector<Vec3> tangent_axes;
+  std::vector<int> driven_joints;  // model joints with a drive unknown in z (ascending)
 };
 void SaveWarmStart(const Data& data, WarmStart* out);
 // Throws std::invalid_argument (and changes nothing) if `saved` was not taken from a Data of this model.

@@ -9,6 +9,7 @@
 //     lambda (num_equalities)  multipliers of the joint equalities (N for linear rows, N m for angular rows)
 //     l_lo, l_hi              limit multipliers (N m or N), if the joint is limited
 //     s_f, sigma_f            friction as a fraction of the Coulomb limit, and the joint's slip speed, if friction > 0
+//     u                       the drive effort (N m or N), if the joint is driven (SetDrivenJoints; step_drives.cpp)
 //   per contact pair c, a block at offset(c):
 //     a1 (3), a2 (3)     closest points on body 1 and body 2, world frame (m)
 //     n (3)              unit normal from body 2 towards body 1
@@ -103,7 +104,7 @@ class StepProblem final : public NcpProblem {
   // Unknowns before the first pair block: the body velocities and the joint blocks.
   int pair_base() const { return pair_base_; }
   int joint_offset(int joint) const { return joint_offset_[joint]; }  // -1 when the joint is not in the problem
-  int joint_size(int joint) const { return model_.joints[joint].size(); }
+  int joint_size(int joint) const { return model_.joints[joint].size() + driven_[joint]; }
   const std::vector<PairBlock>& blocks() const { return blocks_; }
   // The model pairs in the problem, in block order (ascending).
   void ActivePairs(std::vector<int>* pairs) const;
@@ -114,6 +115,18 @@ class StepProblem final : public NcpProblem {
                       std::vector<int>* new_blocks);
   // Changes whenever the layout or the stage (and so the sparsity pattern of the Jacobian) changes.
   int pattern_version() const override { return 3 * pattern_version_ + static_cast<int>(stage_); }
+
+  // --- joint drives (joints.h, JointDrive; implemented in step_drives.cpp) ---
+  // Which joints carry a drive unknown, per model joint (a fixed joint never does). Lays the problem out anew (a new
+  // pattern_version; callers skip an unchanged set): *z_new (not z_old) receives z_old in the new layout with the pairs
+  // and their tangent axes kept, a newly driven joint's effort 0 (zero everywhere without z_old).
+  void SetDrivenJoints(const std::vector<char>& driven, const Eigen::VectorXd* z_old, Eigen::VectorXd* z_new);
+  const std::vector<char>& driven_joints() const { return driven_; }
+  // The drives the rows of driven joints read (one per model joint): set before evaluating, kept by pointer.
+  void set_joint_drives(const std::vector<JointDrive>* drives) { drives_ = drives; }
+  // The drive effort of joint j in a solution z (N m or N; 0 when not driven): in the paper's step, the effort of the
+  // step; in RATTLE's stage 1, stage 1's effort; in its stage 2, the step's average of both stages.
+  double JointDriveEffort(const Eigen::VectorXd& z, int joint) const;
 
   // --- the RATTLE step (StepStage; implemented in step_rattle.cpp) ---
   StepStage stage() const { return stage_; }
@@ -261,6 +274,14 @@ class StepProblem final : public NcpProblem {
                             const BodyEnd& eC, const JointGradient& G_q, Eigen::VectorXd* Phi) const;
   void AddJointDamping(const Joint& joint, const BodyEnd& eP, const BodyEnd& eC, const JointGradient& G_q,
                        Eigen::VectorXd* Phi) const;
+  // The drive row of joint j at row col (step_drives.cpp): stage 1 or the paper's step, and stage 2.
+  void AddJointDriveRow(int j, int col, const Eigen::VectorXd& z, const BodyEnd& eP, const BodyEnd& eC,
+                        const JointGradient& G_q, Eigen::VectorXd* Phi) const;
+  void AddJointDriveRowVelocityStage(int j, int col, const Eigen::VectorXd& z, const BodyEnd& eP, const BodyEnd& eC,
+                                     const JointGradient& G_q, Eigen::VectorXd* Phi) const;
+  double DriveRowScale(const JointDrive& drive) const;
+  // The joint offsets and pair_base_ for joints_ and driven_.
+  void LayOutJoints();
   struct JointBodies {  // a joint's parent (-1: the world) and child as indices into bodies_
     int parent = -1, child = -1;
   };
@@ -296,6 +317,10 @@ class StepProblem final : public NcpProblem {
   mutable std::vector<BodyEnd> end_;  // per entry of bodies_: the current iterate's end-of-step bodies (a cache)
   std::vector<Vec3> tangent_axis_;   // per pair
   std::vector<int> joint_offset_;    // per model joint (-1 when not in the problem)
+  std::vector<char> driven_;         // per model joint: it carries a drive unknown (the last of its block)
+  const std::vector<JointDrive>* drives_ = nullptr;  // per model joint (set_joint_drives)
+  std::vector<int> old_joint_offset_, drive_pairs_, drive_new_blocks_;  // SetDrivenJoints' copies of the old layout
+  std::vector<char> old_driven_;
   int pair_base_ = 0;
   // Per joint, at the start of the step: the gradients of the equalities and of the position. The joint forces act
   // along them over the step while the equalities hold at its end (the SHAKE discretization; see AddJointRows).
@@ -339,6 +364,7 @@ class StepProblem final : public NcpProblem {
   std::vector<char> velocity_kind_;  // complementarity_kind_ of stage 2 (closed pairs and limits only)
   std::vector<std::array<JointGradient, 6>> joint_equality_end_;  // per joint: the gradients at the end of stage 1
   std::vector<JointGradient> joint_position_end_;
+  std::vector<double> joint_q_end_;  // per joint: the position at the end of stage 1 (rad or m)
   std::vector<std::array<char, 2>> limit_closed_;  // per joint: lower, upper limit closed at the end of stage 1
 };
 
