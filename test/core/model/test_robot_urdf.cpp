@@ -309,6 +309,15 @@ TEST_F(RobotUrdf, TheRootIsFixedByDefaultAndFreeWhenFloating) {
   EXPECT_LT(drift_m, 1e-12);
   EXPECT_LT(drift_rad, 1e-12);
 
+  LoaderOptions placed;  // the fixed root at a given pose: a quarter turn about z, 1 m up
+  placed.X_W_root.linear() = Eigen::AngleAxisd(kPi / 2, Vec3::UnitZ()).toRotationMatrix();
+  placed.X_W_root.translation() = Vec3(0, 0, 1);
+  const Model turned = Load(Robot("box_binary.stl"), placed);
+  EXPECT_TRUE(turned.bodies[turned.FindBody("base_link")].is_fixed);
+  EXPECT_TRUE(turned.bodies[turned.FindBody("base_link")].X_WB0.isApprox(placed.X_W_root));
+  const Body& turned_arm = turned.bodies[turned.FindBody("arm")];
+  EXPECT_TRUE(turned_arm.X_WB0.translation().isApprox(Vec3(0, 0.25, 1.5), 1e-12));  // its centre of mass on +y
+
   LoaderOptions floating;
   floating.floating_root = true;
   floating.X_W_root.translation() = Vec3(1, 2, 3);
