@@ -34,7 +34,8 @@ void CheckSpansAVolume(const std::vector<Vec3>& points) {
   for (const Vec3& p : points) scatter += (p - mean) * (p - mean).transpose();
   const Vec3 spread = Eigen::SelfAdjointEigenSolver<Mat3>(scatter).eigenvalues().cwiseMax(0.0).cwiseSqrt();
   if (!(spread[0] > kFlatRatio * spread[2])) {
-    throw std::invalid_argument("the vertices are coplanar or collinear (fewer than 4 non-coplanar vertices): no volume");
+    throw std::invalid_argument(
+        "the vertices are coplanar or collinear (fewer than 4 non-coplanar vertices): no volume");
   }
 }
 

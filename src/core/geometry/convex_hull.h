@@ -24,8 +24,9 @@ struct ConvexHull {
 // The convex hull of `points` (m). Coplanar facets are merged (qhull option C-0), so a box gives 6 faces. When that
 // leaves more than `max_faces` faces, the facets are merged again with a centrum radius that doubles from 1e-4 of
 // the points' extent until at most `max_faces` remain (at most 30 doublings); every face is then moved out until it
-// touches the farthest point, so the hull still contains every point (and its corners are recomputed). Throws std::invalid_argument if a point is not
-// finite or the points do not span a volume (fewer than 4 non-coplanar points).
+// touches the farthest point, so the hull still contains every point (and its corners are recomputed). Throws
+// std::invalid_argument if a point is not finite or the points do not span a volume (fewer than 4 non-coplanar
+// points).
 ConvexHull ComputeConvexHull(const std::vector<Vec3>& points, int max_faces);
 
 }  // namespace implicit_sim

@@ -186,7 +186,8 @@ std::string Robot(const std::string& arm_mesh, const std::string& arm_inertial =
                   const std::string& base_inertial = "") {
   return "<robot name='arm_robot'>"
          "<material name='grey'><color rgba='0.5 0.5 0.5 1'/></material>"
-         "<link name='base_link'>" + base_inertial + "<visual><geometry><mesh filename='package://missing_pkg/base.dae'/></geometry>"
+         "<link name='base_link'>" + base_inertial +
+         "<visual><geometry><mesh filename='package://missing_pkg/base.dae'/></geometry>"
          "<material name='grey'/></visual>"
          "<collision><geometry><box size='0.2 0.2 0.1'/></geometry></collision></link>"
          "<link name='camera'><visual><geometry><box size='0.05 0.05 0.05'/></geometry></visual></link>"
@@ -309,6 +310,15 @@ TEST_F(RobotUrdf, TheRootIsFixedByDefaultAndFreeWhenFloating) {
   EXPECT_LT(drift_m, 1e-12);
   EXPECT_LT(drift_rad, 1e-12);
 
+  LoaderOptions placed;  // the fixed root at a given pose: a quarter turn about z, 1 m up
+  placed.X_W_root.linear() = Eigen::AngleAxisd(kPi / 2, Vec3::UnitZ()).toRotationMatrix();
+  placed.X_W_root.translation() = Vec3(0, 0, 1);
+  const Model turned = Load(Robot("box_binary.stl"), placed);
+  EXPECT_TRUE(turned.bodies[turned.FindBody("base_link")].is_fixed);
+  EXPECT_TRUE(turned.bodies[turned.FindBody("base_link")].X_WB0.isApprox(placed.X_W_root));
+  const Body& turned_arm = turned.bodies[turned.FindBody("arm")];
+  EXPECT_TRUE(turned_arm.X_WB0.translation().isApprox(Vec3(0, 0.25, 1.5), 1e-12));  // its centre of mass on +y
+
   LoaderOptions floating;
   floating.floating_root = true;
   floating.X_W_root.translation() = Vec3(1, 2, 3);
@@ -358,7 +368,8 @@ std::string DropScene(const std::string& collision_geometry, const std::string& 
          "</collision></link><joint name='g' type='fixed'><parent link='world'/><child link='ground'/></joint>"
          "<link name='box'><inertial><mass value='1'/>"
          "<inertia ixx='0.01' iyy='0.01' izz='0.01' ixy='0' ixz='0' iyz='0'/></inertial>"
-         "<collision><origin xyz='" + collision_xyz + "'/><geometry>" + collision_geometry + "</geometry></collision></link>"
+         "<collision><origin xyz='" + collision_xyz + "'/><geometry>" + collision_geometry +
+         "</geometry></collision></link>"
          "<joint name='b' type='floating'><parent link='world'/><child link='box'/><origin xyz='0.25 0 0.3'/>"
          "</joint></robot>";
 }
@@ -386,25 +397,27 @@ TEST_F(RobotUrdf, AMeshBoxRestsOnAPlaneAtTheHeightOfTheSameUrdfBox) {
   EXPECT_NEAR(rest[1], 0.25, 1e-3);
 }
 
-// A mesh box dropped onto a static mesh box: two polytopes, contact through the distance oracle over 12 planes.
+// A static mesh box 'table' and a mesh box dropped onto it from 2 cm, on a floating joint to `parent`.
+std::string StackScene(const std::string& parent) {
+  const std::string world = parent == "world" ? "<link name='world'/><joint name='t' type='fixed'>"
+                                                "<parent link='world'/><child link='table'/></joint>"
+                                              : "";
+  return "<robot name='stack'>" + world +
+         "<link name='table'><collision><origin xyz='-0.25 0 0.125'/>"
+         "<geometry><mesh filename='box_binary.stl'/></geometry></collision></link>"
+         "<link name='box'><inertial><mass value='1'/>"
+         "<inertia ixx='0.01' iyy='0.01' izz='0.01' ixy='0' ixz='0' iyz='0'/></inertial>"
+         "<collision><origin xyz='-0.25 0 0.125'/><geometry><mesh filename='box_ascii.stl'/></geometry></collision>"
+         "</link><joint name='drop' type='floating'><parent link='" + parent + "'/><child link='box'/>"
+         "<origin xyz='0.02 0.01 0.52'/></joint></robot>";
+}
+
+// Two polytopes in contact: the distance oracle over their 12 planes.
 TEST_F(RobotUrdf, AMeshBoxRestsOnAStaticMeshBox) {
-  const std::string scene =
-      "<robot name='stack'><link name='table'><collision><origin xyz='-0.25 0 0.125'/>"
-      "<geometry><mesh filename='box_binary.stl'/></geometry></collision></link>"
-      "<link name='box'><inertial><mass value='1'/>"
-      "<inertia ixx='0.01' iyy='0.01' izz='0.01' ixy='0' ixz='0' iyz='0'/></inertial>"
-      "<collision><origin xyz='-0.25 0 0.125'/><geometry><mesh filename='box_ascii.stl'/></geometry></collision>"
-      "</link><joint name='drop' type='floating'><parent link='table'/><child link='box'/>"
-      "<origin xyz='0.02 0.01 0.52'/></joint></robot>";
-  // The root 'table' is not 'world', so a floating joint under it is refused ...
-  EXPECT_THROW(Load(scene), std::invalid_argument);
-  // ... and the same bodies under 'world' stack: the top box rests at 0.25 + 0.25 m above the table's centre.
-  const std::string world_scene = std::string(scene).replace(scene.find("<link name='table'>"), 0,
-                                                             "<link name='world'/><joint name='t' type='fixed'>"
-                                                             "<parent link='world'/><child link='table'/></joint>");
-  std::string fixed = world_scene;
-  fixed.replace(fixed.find("<parent link='table'/><child link='box'/>"), 41, "<parent link='world'/><child link='box'/>");
-  const Model model = Load(fixed);
+  // Under a root other than 'world' a floating joint is refused (the root is not the world) ...
+  EXPECT_THROW(Load(StackScene("table")), std::invalid_argument);
+  // ... under 'world' the top box comes to rest 0.25 + 0.25 m above the table's centre.
+  const Model model = Load(StackScene("world"));
   EXPECT_EQ(model.pairs.size(), 1u);
   Data data(model);
   State state = State::Initial(model);
@@ -414,7 +427,7 @@ TEST_F(RobotUrdf, AMeshBoxRestsOnAStaticMeshBox) {
   RecordProperty("stacked_height_m", Scientific(X_WB.translation().z()));
   EXPECT_NEAR(X_WB.translation().z(), 0.5, 1e-4);
   EXPECT_NEAR(X_WB.translation().x(), 0.02, 1e-4);
-  EXPECT_LT(std::abs(state.v.norm()), 1e-3);
+  EXPECT_LT(state.v.norm(), 1e-3);
 }
 
 TEST_F(RobotUrdf, AMeshAboveTheFaceCapIsSimplifiedAndTheWarningSaysSo) {
