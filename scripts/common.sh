@@ -16,7 +16,8 @@ APT_PACKAGES="build-essential cmake pkg-config googletest libgtest-dev catkin li
   python3-std-srvs ros-std-srvs python3-rosservice python3-rosnode python3-roslaunch rosbash gdb valgrind
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
   libinteractive-markers-dev python3-interactive-markers libroslib-dev
-  libassimp-dev libqhull-dev ros-robot-state-publisher python3-tf2-ros"
+  libassimp-dev libqhull-dev ros-robot-state-publisher python3-tf2-ros
+  libtrajectory-msgs-dev ros-trajectory-msgs python3-trajectory-msgs"
 
 install_packages() {
   local missing=""

@@ -20,7 +20,8 @@ namespace {
 
 ros::Time Stamp(double sim_time) { return ros::Time().fromSec(sim_time); }
 
-// The effort the core applies for a command: clamped to the URDF effort limit, plus the scene's constant effort.
+// The effort the core applies for a command: clamped to the URDF effort limit, plus the scene's constant effort (a
+// drive's effort comes on top).
 double AppliedEffort(const Joint& joint, double commanded) {
   return ClampJointEffort(joint, commanded) + joint.applied_effort;
 }
@@ -150,7 +151,8 @@ sensor_msgs::JointState SimNode::JointStatesMsg(const Snapshot& snapshot) const 
     msg.name.push_back(joint.name);
     msg.position.push_back(JointPosition(model, snapshot.state, j));
     msg.velocity.push_back(JointVelocity(model, snapshot.state, j));
-    msg.effort.push_back(AppliedEffort(joint, snapshot.efforts[j]));
+    const double drive = snapshot.stepped ? snapshot.drive_efforts[j] : 0.0;
+    msg.effort.push_back(AppliedEffort(joint, snapshot.efforts[j]) + drive);
   }
   return msg;
 }
@@ -219,6 +221,8 @@ void SimNode::UpdateDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& sta
   status.add("dropped_wrench_commands", d.dropped_wrench_commands);
   status.add("received_joint_effort_commands", d.received_joint_commands);
   status.add("dropped_joint_effort_commands", d.dropped_joint_commands);
+  status.add("received_drive_commands", d.received_drive_commands);
+  status.add("dropped_drive_commands", d.dropped_drive_commands);
   for (StepFault fault : {StepFault::kNotConverged, StepFault::kNoFiniteSolution, StepFault::kInitialOverlap,
                           StepFault::kDiverged, StepFault::kCrossing}) {
     status.add(std::string("faults_") + StepFaultName(fault), d.faults[static_cast<int>(fault)]);

@@ -42,6 +42,8 @@ void SimNode::AdvertiseServices() {
   services_.push_back(pnh_.advertiseService("delete", &SimNode::OnDelete, this));
   services_.push_back(pnh_.advertiseService("load_scene", &SimNode::OnLoadScene, this));
   joint_effort_sub_ = pnh_.subscribe("joint_effort_cmd", 100, &SimNode::OnJointEffortCommand, this);
+  joint_command_sub_ = pnh_.subscribe("joint_command", 100, &SimNode::OnJointCommand, this);
+  joint_trajectory_sub_ = pnh_.subscribe("joint_trajectory", 10, &SimNode::OnJointTrajectory, this);
   run_steps_server_ = std::make_unique<actionlib::SimpleActionServer<implicit_sim::RunStepsAction>>(
       pnh_, "run_steps", [this](const implicit_sim::RunStepsGoalConstPtr& goal) { OnRunStepsGoal(goal); }, false);
 }

@@ -135,9 +135,17 @@ void SimNode::CarryOver(const World& from, World* to) const {
     to->state.v.segment<6>(Model::v_offset(slot)) = from.state.v.segment<6>(Model::v_offset(old_slot));
     to->commanded_W.segment<6>(Model::v_offset(slot)) = from.commanded_W.segment<6>(Model::v_offset(old_slot));
   }
+  std::vector<int> joint_in_new(old_model.joints.size(), -1);
   for (size_t j = 0; j < model.joints.size(); ++j) {
     const int old = old_model.FindJoint(model.joints[j].name);
-    if (old >= 0) to->joint_efforts[j] = from.joint_efforts[old];
+    if (old < 0) continue;
+    joint_in_new[old] = static_cast<int>(j);
+    to->joint_efforts[j] = from.joint_efforts[old];
+    to->data->joint_drives[j] = from.data->joint_drives[old];
+  }
+  for (Trajectory trajectory : from.trajectories) {
+    for (int& j : trajectory.joints) j = j < 0 ? -1 : joint_in_new[j];
+    to->trajectories.push_back(std::move(trajectory));
   }
   const auto body_in_new = [&](int old_body) {
     return old_body < 0 ? -1 : model.FindBody(old_model.bodies[old_body].name);

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <algorithm>
 #include <limits>
 #include <stdexcept>
 
@@ -158,6 +159,7 @@ void SimNode::RunCommands() {
 }
 
 void SimNode::ComputeWrenches() {
+  UpdateTrajectoryDrives();
   World& w = *world_;
   const Model& model = *w.model;
   w.wrench_W.setZero();
@@ -249,6 +251,9 @@ void SimNode::ResetWorld() {
   w.wrenches.clear();
   w.commanded_W.setZero();
   w.joint_efforts.setZero();
+  std::fill(w.data->joint_drives.begin(), w.data->joint_drives.end(), JointDrive());
+  w.trajectories.clear();
+  w.drags.clear();
   restart_pacing_ = true;
   stepped_ = false;
   SaveSnapshot();
@@ -261,6 +266,7 @@ void SimNode::SaveSnapshot() {
   snapshot->state = w.state;
   snapshot->contacts = w.data->contacts;
   snapshot->efforts = w.joint_efforts;
+  snapshot->drive_efforts = w.data->joint_drive_effort;
   snapshot->sim_time = SimTime();
   snapshot->version = ++snapshot_version_;
   snapshot->stepped = stepped_;

@@ -27,6 +27,7 @@
 #include <ros/ros.h>
 #include <sensor_msgs/JointState.h>
 #include <std_srvs/Trigger.h>
+#include <trajectory_msgs/JointTrajectory.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -37,6 +38,7 @@
 #include "implicit_sim/BodyWrench.h"
 #include "implicit_sim/Contacts.h"
 #include "implicit_sim/GetBodyState.h"
+#include "implicit_sim/JointCommand.h"
 #include "implicit_sim/RunStepsAction.h"
 #include "implicit_sim/SetBodyState.h"
 #include "implicit_sim/SetJointEfforts.h"
@@ -88,6 +90,15 @@ class SimNode {
     Vec3 p_GM_W;    // from the grabbed point to the marker origin at the grab, world frame (m)
   };
 
+  // A ~joint_trajectory being followed (node_drives.cpp); times in s, positions in rad or m.
+  struct Trajectory {
+    std::vector<int> joints;  // model joints; -1 where a later command took the joint over
+    double start = 0.0;       // simulation time of time_from_start = 0 (s)
+    std::vector<double> times, from;  // time_from_start of each point; the joints' positions at the start
+    std::vector<std::vector<double>> positions, velocities;  // per point, per joint
+    double stiffness = 0.0, damping = 0.0;  // the drive gains (~drive_stiffness, ~drive_damping when received)
+  };
+
   // What the physics thread steps. Data keeps a pointer to its model, so the model lives on the heap.
   struct World {
     std::shared_ptr<const Model> model;
@@ -99,6 +110,7 @@ class SimNode {
     Eigen::VectorXd wrench_W;       // the wrench handed to the core (at the centre of mass; core/model/wrench.h)
     Eigen::VectorXd joint_efforts;  // per model joint: the commanded effort (N m or N; fixed joints 0)
     std::vector<DragSpring> drags;
+    std::vector<Trajectory> trajectories;
     std::string urdf;       // the scene's URDF text (what ~spawn and ~delete edit)
     std::string scene_dir;  // where its relative mesh paths resolve ("" for a scene given as text)
     explicit World(std::shared_ptr<const Model> loaded);
@@ -110,7 +122,8 @@ class SimNode {
     std::shared_ptr<const Model> model;
     State state;
     std::vector<ContactResult> contacts;
-    Eigen::VectorXd efforts;  // per model joint (N m or N)
+    Eigen::VectorXd efforts;  // per model joint: the commanded effort (N m or N)
+    std::vector<double> drive_efforts;  // per model joint: the drive's effort over the last step (N m or N)
     double sim_time = 0.0;    // s
     uint64_t version = 0;
     bool stepped = false;     // a step has run since startup or the last reset (contact results exist)
@@ -138,6 +151,7 @@ class SimNode {
     long steps = 0, nonconverged = 0, failed = 0;  // since the last report
     long received_wrench_commands = 0, dropped_wrench_commands = 0;
     long received_joint_commands = 0, dropped_joint_commands = 0;
+    long received_drive_commands = 0, dropped_drive_commands = 0;
     long faults[6] = {0, 0, 0, 0, 0, 0};  // refused or non-converged steps since startup, by StepFault
     bool paused = false;
     bool fault_holds = false;  // a refused step paused the simulation; cleared by ~unpause, ~reset
@@ -192,6 +206,14 @@ class SimNode {
   LiveParams Live() const;
   void SetUpReconfigure();
   void OnReconfigure(SimNodeConfig& next);
+  // node_drives.cpp: joint drives.
+  void OnJointCommand(const implicit_sim::JointCommand::ConstPtr& msg);
+  void OnJointTrajectory(const trajectory_msgs::JointTrajectory::ConstPtr& msg);
+  bool ApplyJointCommand(const implicit_sim::JointCommand& msg, std::string* error);          // physics thread
+  bool StartTrajectory(const trajectory_msgs::JointTrajectory& msg, std::string* error);      // physics thread
+  void StopTrajectoryOf(int joint);
+  void UpdateTrajectoryDrives();  // the trajectories' targets for the step starting now
+  void CountDriveCommand(bool ok, const char* topic, const std::string& error);
   // node_drag.cpp: interactive markers that push bodies.
   void SetUpDragMarkers(const Model& model, const State& state);
   void OnDrag(const visualization_msgs::InteractiveMarkerFeedbackConstPtr& feedback);
@@ -280,7 +302,7 @@ class SimNode {
 
   ros::Publisher clock_pub_, tf_pub_, contacts_pub_, markers_pub_, stats_pub_, body_states_pub_, joint_states_pub_;
   std::vector<ros::ServiceServer> services_;
-  ros::Subscriber wrench_sub_, joint_effort_sub_;
+  ros::Subscriber wrench_sub_, joint_effort_sub_, joint_command_sub_, joint_trajectory_sub_;
   tf2_ros::StaticTransformBroadcaster static_broadcaster_;
   diagnostic_updater::Updater diagnostics_;
   std::unique_ptr<actionlib::SimpleActionServer<implicit_sim::RunStepsAction>> run_steps_server_;
