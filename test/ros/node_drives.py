@@ -1,0 +1,104 @@
+#!/usr/bin/python3
+"""Joint drives through the node (doc/ros_node.md#joint-drives) on the gripper scene (test/ros/node_drives.test):
+- ~joint_command closes the fingers on the ball by position; the squeeze saturates at the URDF effort limit (10 N),
+  which /joint_states reports (plus the scene's constant 2 N);
+- a ~joint_trajectory lifts the palm 0.1 m in 0.5 s of simulation time: the ball rises with it without slipping and
+  the lift ends on its target within the sag of the drive;
+- bad commands are dropped whole and counted in /diagnostics."""
+import time
+import unittest
+
+import dynamic_reconfigure.client
+import rospy
+import rostest
+from diagnostic_msgs.msg import DiagnosticArray
+from implicit_sim.msg import JointCommand
+from implicit_sim.srv import GetBodyState, Step
+from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+NODE = "/implicit_sim"
+
+
+def call(name, srv_type, *args):
+    rospy.wait_for_service(NODE + "/" + name, timeout=10)
+    return rospy.ServiceProxy(NODE + "/" + name, srv_type)(*args)
+
+
+def height(body):
+    return call("get_body_state", GetBodyState, body).state.pose.position.z
+
+
+def joints():
+    msg = rospy.wait_for_message("/joint_states", JointState, timeout=5)
+    return {n: (p, e) for n, p, e in zip(msg.name, msg.position, msg.effort)}
+
+
+def diagnostic(key):
+    time.sleep(1.1)
+    msg = rospy.wait_for_message("/diagnostics", DiagnosticArray, timeout=5)
+    return int({kv.key: kv.value for kv in msg.status[0].values}[key])
+
+
+def publisher(topic, msg_type):
+    pub = rospy.Publisher(NODE + "/" + topic, msg_type, queue_size=10)
+    deadline = time.monotonic() + 5
+    while pub.get_num_connections() == 0 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return pub
+
+
+class NodeDrives(unittest.TestCase):
+    def test_1_the_gripper_closes_by_position_and_a_trajectory_lifts_the_ball_without_slip(self):
+        commands = publisher("joint_command", JointCommand)
+        lift0 = joints()["lift"][0]
+        commands.publish(JointCommand(name=["left_slide", "right_slide", "lift"], position=[0.01, -0.01, lift0],
+                                      velocity=[], stiffness=[1e4, 1e4, 2000.0], damping=[20.0, 20.0, 60.0]))
+        time.sleep(0.3)
+        self.assertTrue(call("step", Step, 300).success)
+        grip = joints()
+        ball0, palm0 = height("ball"), height("palm")
+        # Saturated: the drive's 10 N limit plus the scene's constant 2 N (left) and -2 N (right).
+        self.assertAlmostEqual(grip["left_slide"][1], 12.0, delta=1e-6)
+        self.assertAlmostEqual(grip["right_slide"][1], -12.0, delta=1e-6)
+
+        client = dynamic_reconfigure.client.Client(NODE, timeout=10)
+        client.update_configuration({"drive_stiffness": 2000.0, "drive_damping": 60.0})
+        trajectories = publisher("joint_trajectory", JointTrajectory)
+        trajectory = JointTrajectory(joint_names=["lift"])
+        for k in range(1, 6):  # 0.1 m in 0.5 s, through points every 0.1 s
+            trajectory.points.append(JointTrajectoryPoint(positions=[lift0 + 0.02 * k], velocities=[0.2 if k < 5 else 0.0],
+                                                          time_from_start=rospy.Duration(0.1 * k)))
+        trajectories.publish(trajectory)
+        time.sleep(0.3)
+        slip = 0.0
+        for _ in range(10):
+            self.assertTrue(call("step", Step, 100).success)
+            slip = max(slip, abs((height("ball") - height("palm")) - (ball0 - palm0)))
+        rise = height("ball") - ball0
+        lift = joints()["lift"][0]
+        print("[ INFO ] gripper: squeeze %.6f N, ball rose %.6f m, slip %.2e m, lift %.6f m off its target"
+              % (grip["left_slide"][1], rise, slip, lift - (lift0 + 0.1)), flush=True)
+        self.assertAlmostEqual(rise, 0.1, delta=1e-3)  # the drive's sag: (4.709 - 0.4 g) N / 2000 N/m = 0.4 mm
+        self.assertLess(slip, 1e-6)
+        self.assertAlmostEqual(lift, lift0 + 0.1, delta=1e-3)
+
+    def test_2_bad_commands_are_dropped_whole_and_counted(self):
+        commands = publisher("joint_command", JointCommand)
+        trajectories = publisher("joint_trajectory", JointTrajectory)
+        before = diagnostic("dropped_drive_commands")
+        lift = joints()["lift"][0]
+        commands.publish(JointCommand(name=["lift"], position=[float("nan")]))
+        commands.publish(JointCommand(name=["no_such_joint"], position=[0.0]))
+        commands.publish(JointCommand(name=["left_slide"], position=[0.5]))  # outside [-0.02, 0.02] m
+        commands.publish(JointCommand(name=["lift", "left_slide"], position=[0.0]))  # lengths differ
+        trajectories.publish(JointTrajectory(joint_names=["lift"], points=[JointTrajectoryPoint(
+            positions=[0.1], time_from_start=rospy.Duration(-1.0))]))
+        self.assertEqual(diagnostic("dropped_drive_commands") - before, 5)
+        self.assertTrue(call("step", Step, 10).success)
+        self.assertAlmostEqual(joints()["lift"][0], lift, delta=1e-4)  # the drives in force are unchanged
+
+
+if __name__ == "__main__":
+    rospy.init_node("node_drives")
+    rostest.rosrun("implicit_sim", "node_drives", NodeDrives)
