@@ -7,6 +7,7 @@ scenes/cube_drop.urdf, real time, publish_rate 30 Hz, no /use_sim_time so the ti
 - during a ~run_steps goal of 1e6 steps, services, /clock and feedback stay responsive; the goal cancels within 1 s;
 - /diagnostics stays ERROR while a refused step holds the simulation, and OK again after ~reset;
 - SIGINT stops a second node within 2 s while it runs a 1e6-step goal;
+- every launch file declares every argument of sim.launch (with a doc) and passes them all on;
 - dragging a body's interactive marker holds it where a critically damped spring predicts; releasing drops it;
 - dynamic_reconfigure applies good values at once and refuses NaN, Inf and out-of-range ones, keeping the previous."""
 import math
@@ -26,6 +27,7 @@ import rospy
 import rostest
 import rosservice
 import yaml
+from xml.etree import ElementTree
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Point, Pose, Vector3, Wrench
 from implicit_sim.msg import BodyStates, RunStepsAction, RunStepsGoal
@@ -282,6 +284,24 @@ class NodeContract(unittest.TestCase):
         self.assertLess(abs(dropped), 1e-3)
         self.assertGreater(len(arrows), 0)
         self.assertGreater(len(deleted), 0)
+
+    def test_9_every_launch_file_declares_and_passes_every_argument_of_sim_launch(self):
+        launch_dir = os.path.join(SOURCE_DIR, "launch")
+        sim = ElementTree.parse(os.path.join(launch_dir, "sim.launch")).getroot()
+        declared = {a.get("name") for a in sim.findall("arg") if a.get("default") is not None}
+        for a in sim.findall("arg"):
+            if a.get("default") is not None:
+                self.assertTrue(a.get("doc"), "sim.launch: argument %s has no doc" % a.get("name"))
+        for name in sorted(os.listdir(launch_dir)):
+            if name == "sim.launch" or not name.endswith(".launch"):
+                continue
+            root = ElementTree.parse(os.path.join(launch_dir, name)).getroot()
+            args = {a.get("name"): a for a in root.findall("arg")}
+            self.assertEqual(declared - set(args), set(), "%s does not declare these sim.launch arguments" % name)
+            self.assertTrue(all(a.get("doc") for a in args.values()), "%s: an argument without doc" % name)
+            include = root.find("include")
+            self.assertTrue(include.get("file").endswith("/launch/sim.launch"), name)
+            self.assertEqual(include.get("pass_all_args"), "true", name)
 
     def test_6_sigint_stops_a_node_within_2_s_in_the_middle_of_a_long_goal(self):
         name = "/sigint_goal_node"
