@@ -12,9 +12,11 @@ import threading
 import time
 import unittest
 
+import implicit_sim.srv
 import rosgraph_msgs.msg
 import rospy
 import rostest
+import std_srvs.srv
 import tf2_msgs.msg
 
 
@@ -86,6 +88,36 @@ class PileRates(unittest.TestCase):
         self.assertGreaterEqual(len(tf_in), int(0.8 * expected_tf))
         self.assertEqual(late, [], "completed steps not on /tf within 2 periods + 0.5 s: (sim time, delay s)")
         self.assertGreater(len(steps), 1, "the physics never completed a step")
+
+    def test_services_answer_between_steps(self):
+        """With 100 bodies and steps of 0.1-1 s, ~get_body_state answers from the snapshot at once and a service that
+        changes the world (~clear_body_wrenches) within one step: never later than the longest step seen + 1 s."""
+        time.sleep(3.0)  # steps are running
+        rospy.wait_for_service("/implicit_sim/get_body_state", timeout=10)
+        get = rospy.ServiceProxy("/implicit_sim/get_body_state", implicit_sim.srv.GetBodyState)
+        clear = rospy.ServiceProxy("/implicit_sim/clear_body_wrenches", std_srvs.srv.Trigger)
+        reads, writes = [], []
+        for _ in range(3):
+            start = time.monotonic()
+            self.assertTrue(get("body_0").success)
+            reads.append(time.monotonic() - start)
+            start = time.monotonic()
+            self.assertTrue(clear().success)
+            writes.append(time.monotonic() - start)
+        time.sleep(0.5)
+        with self.lock:  # the steps seen before and during the calls: a call waits for at most the one in progress
+            clock = list(self.clock)
+        news, last = [], -1.0
+        for wall, sim in clock:
+            if sim > last:
+                news.append(wall)
+                last = sim
+        longest_step = max((b - a for a, b in zip(news, news[1:])), default=0.0)
+        print("[ INFO ] pile N = %d: ~get_body_state %s s, ~clear_body_wrenches %s s, longest step seen %.3f s"
+              % (rospy.get_param("~n"), [round(r, 3) for r in reads], [round(w, 3) for w in writes], longest_step),
+              flush=True)
+        self.assertLess(max(reads), 0.5)
+        self.assertLess(max(writes), max(longest_step, 1.0) + 1.0)
 
 
 if __name__ == "__main__":

@@ -325,6 +325,17 @@ TEST(SimNode, ABadParameterOrSceneStopsTheNodeAtStartup) {
   out = RunCommand(std::string("timeout 30 ") + IMPLICIT_SIM_NODE + " __name:=bad_scene _scene:=no_such_scene", &code);
   EXPECT_EQ(code, 1) << out;
   EXPECT_NE(out.find("~scene"), std::string::npos) << out;
+  // ~world_frame naming a link (tf would get ball -> ball) and a misspelt parameter stop the node too.
+  out = RunCommand(std::string("timeout 30 ") + IMPLICIT_SIM_NODE +
+                       " __name:=bad_frame _scene:=p3_sphere_on_two_spheres _world_frame:=ball",
+                   &code);
+  EXPECT_EQ(code, 1) << out;
+  EXPECT_NE(out.find("~world_frame = 'ball' is a link"), std::string::npos) << out;
+  out = RunCommand(std::string("timeout 30 ") + IMPLICIT_SIM_NODE +
+                       " __name:=bad_name _scene:=p3_sphere_on_two_spheres _publish_rat:=5",
+                   &code);
+  EXPECT_EQ(code, 1) << out;
+  EXPECT_NE(out.find("unknown parameter ~publish_rat"), std::string::npos) << out;
 }
 
 // Solver parameters go through the core's options table: an integer parameter given as a non-integer double is
