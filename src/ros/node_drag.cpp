@@ -107,10 +107,11 @@ void SimNode::AddDragWrenches() {
 }
 
 void SimNode::UpdateDragMarkers(const Snapshot& snapshot, PublishMemory* memory) {
-  if (!drag_server_) return;
+  if (!drag_server_ || snapshot.version == memory->drag_version) return;  // nothing moved: nothing to send
   const double now = ros::WallTime::now().toSec();
   if (now < memory->next_drag_update) return;
   memory->next_drag_update = now + kMarkerUpdatePeriodS;
+  memory->drag_version = snapshot.version;
   const Model& model = *snapshot.model;
   std::set<std::string> dragged;
   {

@@ -131,7 +131,7 @@ void SimNode::CarryOver(const World& from, World* to) const {
     const int old = old_model.FindBody(model.bodies[b].name);
     if (old < 0 || old_model.bodies[old].is_fixed) continue;
     const int old_slot = old_model.velocity_slot[old];
-    to->state.q.segment<7>(7 * slot) = from.state.q.segment<7>(7 * old_slot);
+    to->state.q.segment<7>(Model::q_offset(slot)) = from.state.q.segment<7>(Model::q_offset(old_slot));
     to->state.v.segment<6>(Model::v_offset(slot)) = from.state.v.segment<6>(Model::v_offset(old_slot));
     to->commanded_W.segment<6>(Model::v_offset(slot)) = from.commanded_W.segment<6>(Model::v_offset(old_slot));
   }

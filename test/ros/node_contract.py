@@ -39,9 +39,9 @@ from visualization_msgs.msg import InteractiveMarkerFeedback, MarkerArray
 
 NODE = "/implicit_sim"
 SOURCE_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-# Bytes per second of wall time of a bag of the resting cube (sim.launch's record topics) before shapes were sent once:
-# 97 MB in 11 s, measured with the node of commit f3ed9e4 (the figure; doc/ros_node.md#traffic).
-BAG_RATE_BEFORE = 97e6 / 11.0
+# Bytes per second of wall time of a bag of the resting cube (sim.launch's record topics, the same 8 s window) before
+# shapes were sent once: measured with the node of commit f3ed9e4 (doc/ros_node.md#traffic).
+BAG_RATE_BEFORE = 8.93e6
 
 
 def resolve(name):

@@ -138,6 +138,7 @@ class SimNode {
     uint64_t last_version = 0;               // snapshot version last published
     int shown_drag_arrows = 0;               // drag arrows last published (ids 0 ... n-1)
     double next_drag_update = 0.0;           // s of wall time: the next pose update of the interactive markers
+    uint64_t drag_version = 0;               // snapshot version the interactive markers show
   };
   // A ~step or ~run_steps request: steps run by the physics thread while paused. Guarded by mailbox_mutex_.
   struct StepJob {
