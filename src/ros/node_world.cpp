@@ -163,6 +163,12 @@ void SimNode::CarryOver(const World& from, World* to) const {
   }
 }
 
+std::unique_ptr<SimNode::World> SimNode::EditedWorld(const std::string& urdf) const {
+  std::unique_ptr<World> next = BuildWorld(SceneText{urdf, world_->model->scene_name, world_->scene_dir});
+  CarryOver(*world_, next.get());
+  return next;
+}
+
 void SimNode::ReplaceWorld(std::unique_ptr<World> next) {
   world_ = std::move(next);
   stepped_ = false;  // a new Data: no contact results, the next step starts cold
@@ -203,8 +209,7 @@ bool SimNode::OnSpawn(implicit_sim::Spawn::Request& req, implicit_sim::Spawn::Re
            try {
              std::vector<std::string> added;
              const std::string urdf = AddToScene(world_->urdf, addition, &added);
-             std::unique_ptr<World> next = BuildWorld(SceneText{urdf, world_->model->scene_name, world_->scene_dir});
-             CarryOver(*world_, next.get());
+             std::unique_ptr<World> next = EditedWorld(urdf);
              std::string overlap;
              Data check(*next->model);
              if (FindInitialOverlap(*next->model, next->state, options_.overlap_tolerance, &check, &overlap)) {
@@ -228,8 +233,7 @@ bool SimNode::OnDelete(implicit_sim::Delete::Request& req, implicit_sim::Delete:
            try {
              std::vector<std::string> removed;
              const std::string urdf = RemoveFromScene(world_->urdf, req.bodies, &removed);
-             std::unique_ptr<World> next = BuildWorld(SceneText{urdf, world_->model->scene_name, world_->scene_dir});
-             CarryOver(*world_, next.get());
+             std::unique_ptr<World> next = EditedWorld(urdf);
              ReplaceWorld(std::move(next));
              res.deleted = removed;
              res.success = true;

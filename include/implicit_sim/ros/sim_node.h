@@ -171,6 +171,8 @@ class SimNode {
   bool ReadRequestedScene(const std::string& urdf, const std::string& file, SceneText* out, std::string* error) const;
   std::unique_ptr<World> BuildWorld(const SceneText& scene) const;  // throws std::invalid_argument (the loader's)
   void CarryOver(const World& from, World* to) const;  // the shared bodies' state and commands, by name
+  // The current world edited to `urdf` (same name and mesh directory), with what it shares carried over.
+  std::unique_ptr<World> EditedWorld(const std::string& urdf) const;
   void ReplaceWorld(std::unique_ptr<World> next);       // physics thread
   void PublishRobotDescription(const std::string& urdf) const;
   bool OnSpawn(implicit_sim::Spawn::Request& req, implicit_sim::Spawn::Response& res);
