@@ -2,6 +2,7 @@
 """Writes the validation scenes (doc/scenes.md) into scenes/ (P1 smooth and polygonal discs,
 P2, P3). The files are committed; rerun this after changing it: /usr/bin/python3 scripts/make_scenes.py"""
 import os
+import random
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCENES = os.path.join(HERE, "..", "scenes")
@@ -136,6 +137,79 @@ P3 = """<?xml version="1.0"?>
 """
 
 
+def rounded_box_link(name, mass, size):
+    """A link whose collision shape is the box rounded into a superellipsoid of exponent 8 (no sharp edges or
+    corners, which make degenerate contact-point problems); inertia of the solid box."""
+    x, y, z = size
+    ixx, iyy, izz = (mass / 12 * (y * y + z * z), mass / 12 * (x * x + z * z), mass / 12 * (x * x + y * y))
+    geometry = f'<box size="{x} {y} {z}"/>'
+    return f"""  <link name="{name}">
+    <inertial><mass value="{mass}"/><inertia ixx="{ixx:.6g}" iyy="{iyy:.6g}" izz="{izz:.6g}" ixy="0" ixz="0" iyz="0"/></inertial>
+    <visual><geometry>{geometry}</geometry></visual>
+    <collision><geometry>{geometry}</geometry><implicit type="superellipsoid" semi_axes="{x / 2:g} {y / 2:g} {z / 2:g}" exponent="8"/></collision>
+  </link>
+"""
+
+
+def wall(name, xyz, rpy):
+    return f"""  <link name="{name}">
+    <visual><origin xyz="0 0 -0.01"/><geometry><box size="1.2 1.2 0.02"/></geometry></visual>
+    <collision><geometry><box size="1.2 1.2 0.001"/></geometry><implicit type="halfspace"/></collision>
+  </link>
+  <joint name="{name}_joint" type="fixed"><parent link="world"/><child link="{name}"/><origin xyz="{xyz}" rpy="{rpy}"/></joint>
+"""
+
+
+def soak_bin():
+    """The soak benchmark's scene (bench/soak): 20 spheres in the 1 m x 1 m box of the S1 pile and a four-joint
+    gripper above them (lift, wrist, two fingers) that reaches down into the spheres."""
+    half_pi = "1.5707963267948966"
+    parts = ['<?xml version="1.0"?>\n',
+             "<!-- Soak benchmark scene (bench/soak, doc/scenes.md): 20 spheres (r = 0.05 m, 0.1 kg) resting in a 1 m x 1 m\n"
+             "     box of half-spaces, and a gripper above them (rounded boxes): a carriage on the vertical prismatic joint 'lift', a palm on\n"
+             "     the revolute joint 'wrist' (about z), two fingers on the prismatic joints 'left_slide' and 'right_slide'.\n"
+             "     With lift = -0.27 m the finger tips are 0.025 m above the floor, among the spheres.\n"
+             "     Written by scripts/make_scenes.py. -->\n",
+             '<robot name="soak_bin">\n  <implicit_sim gravity="0 0 -9.81">\n'
+             '    <friction mu="0.5" e_t="1" e_o="1" e_r="0.01"/>\n  </implicit_sim>\n  <link name="world"/>\n',
+             wall("floor", "0 0 0", "0 0 0"), wall("wall_px", "0.5 0 0", f"0 -{half_pi} 0"),
+             wall("wall_nx", "-0.5 0 0", f"0 {half_pi} 0"), wall("wall_py", "0 0.5 0", f"{half_pi} 0 0"),
+             wall("wall_ny", "0 -0.5 0", f"-{half_pi} 0 0"),
+             rounded_box_link("carriage", 0.2, (0.04, 0.04, 0.04)),
+             '  <joint name="lift" type="prismatic"><parent link="world"/><child link="carriage"/>'
+             '<origin xyz="0 0 0.5"/><axis xyz="0 0 1"/>\n'
+             '    <limit lower="-0.35" upper="0.1" effort="12" velocity="1"/></joint>\n',
+             rounded_box_link("palm", 0.4, (0.3, 0.06, 0.03)),
+             '  <joint name="wrist" type="revolute"><parent link="carriage"/><child link="palm"/>'
+             '<origin xyz="0 0 -0.035"/><axis xyz="0 0 1"/>\n'
+             '    <limit lower="-3.0" upper="3.0" effort="3" velocity="3"/></joint>\n',
+             rounded_box_link("left_finger", 0.1, (0.03, 0.06, 0.14)),
+             '  <joint name="left_slide" type="prismatic"><parent link="palm"/><child link="left_finger"/>'
+             '<origin xyz="-0.1 0 -0.085"/><axis xyz="1 0 0"/>\n'
+             '    <limit lower="-0.05" upper="0.09" effort="10" velocity="1"/></joint>\n',
+             rounded_box_link("right_finger", 0.1, (0.03, 0.06, 0.14)),
+             '  <joint name="right_slide" type="prismatic"><parent link="palm"/><child link="right_finger"/>'
+             '<origin xyz="0.1 0 -0.085"/><axis xyz="1 0 0"/>\n'
+             '    <limit lower="-0.09" upper="0.05" effort="10" velocity="1"/></joint>\n']
+    rng = random.Random(19)
+    radius, mass = 0.05, 0.1
+    inertia = 0.4 * mass * radius * radius
+    for i in range(20):
+        row, col = divmod(i, 5)
+        x = -0.3 + 0.15 * col + rng.uniform(-0.02, 0.02)
+        y = -0.225 + 0.15 * row + rng.uniform(-0.02, 0.02)
+        z = radius + rng.uniform(0.002, 0.02)
+        parts.append(f"""  <link name="ball_{i}">
+    <inertial><mass value="{mass}"/><inertia ixx="{inertia:.6g}" iyy="{inertia:.6g}" izz="{inertia:.6g}" ixy="0" ixz="0" iyz="0"/></inertial>
+    <visual><geometry><sphere radius="{radius}"/></geometry></visual>
+    <collision><geometry><sphere radius="{radius}"/></geometry></collision>
+  </link>
+  <joint name="ball_{i}_joint" type="floating"><parent link="world"/><child link="ball_{i}"/><origin xyz="{x:.4f} {y:.4f} {z:.4f}"/></joint>
+""")
+    parts.append("</robot>\n")
+    return "".join(parts)
+
+
 def write(name, text):
     with open(os.path.join(SCENES, name), "w") as f:
         f.write(text)
@@ -152,6 +226,7 @@ def main():
                                      f"polygonal disc: a regular {n}-gon prism, circumradius 1 m, a vertex down"))
     write("p2_sphere_spinning.urdf", P2)
     write("p3_sphere_on_two_spheres.urdf", P3)
+    write("soak_bin.urdf", soak_bin())
 
 
 if __name__ == "__main__":

@@ -82,6 +82,7 @@ void SimNode::OnDrag(const visualization_msgs::InteractiveMarkerFeedbackConstPtr
       const Vec3 grab = feedback->mouse_point_valid ? conv::ToVec3(feedback->mouse_point) : X_WL.translation();
       if (!grab.allFinite()) return;
       w.drags.push_back(DragSpring{body, X_WL.inverse() * grab, grab, p_WM - grab});
+      JournalUnreplayable("~drag");
       std::lock_guard<std::mutex> lock(drag_mutex_);
       dragged_.insert(model.bodies[body].name);
       drag = w.drags.end() - 1;

@@ -63,10 +63,15 @@ void SimNode::CountDriveCommand(bool ok, const char* topic, const std::string& e
 
 void SimNode::OnJointCommand(const implicit_sim::JointCommand::ConstPtr& msg) {
   PostBetweenSteps([this, msg] {
-    std::string error;
-    const bool ok = ApplyJointCommand(*msg, &error);
-    CountDriveCommand(ok, "~joint_command", error);
+    Journal(JournalInput::kJointCommand, *msg);
+    ApplyJointCommandCounted(*msg);
   });
+}
+
+void SimNode::ApplyJointCommandCounted(const implicit_sim::JointCommand& msg) {
+  std::string error;
+  const bool ok = ApplyJointCommand(msg, &error);
+  CountDriveCommand(ok, "~joint_command", error);
 }
 
 bool SimNode::ApplyJointCommand(const implicit_sim::JointCommand& msg, std::string* error) {
@@ -106,10 +111,15 @@ void SimNode::StopTrajectoryOf(int joint) {
 
 void SimNode::OnJointTrajectory(const trajectory_msgs::JointTrajectory::ConstPtr& msg) {
   PostBetweenSteps([this, msg] {
-    std::string error;
-    const bool ok = StartTrajectory(*msg, &error);
-    CountDriveCommand(ok, "~joint_trajectory", error);
+    Journal(JournalInput::kJointTrajectory, *msg);
+    StartTrajectoryCounted(*msg);
   });
+}
+
+void SimNode::StartTrajectoryCounted(const trajectory_msgs::JointTrajectory& msg) {
+  std::string error;
+  const bool ok = StartTrajectory(msg, &error);
+  CountDriveCommand(ok, "~joint_trajectory", error);
 }
 
 bool SimNode::StartTrajectory(const trajectory_msgs::JointTrajectory& msg, std::string* error) {

@@ -45,7 +45,7 @@ void ReadOptionParams(const ros::NodeHandle& pnh, StepperOptions* options) {
 
 // The node's own private parameters besides the options table's.
 const char* const kNodeParams[] = {"scene", "scenes_dir", "paused", "on_fault", "world_frame", "publish_joint_link_tf",
-                                   "interactive_markers", "floating_root"};
+                                   "interactive_markers", "floating_root", "input_journal", "replay_journal"};
 
 void RefuseUnknownParams(const ros::NodeHandle& pnh) {
   std::vector<std::string> names;
@@ -109,6 +109,8 @@ NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
   p.publish_joint_link_tf = ReadParam(pnh, "publish_joint_link_tf", p.publish_joint_link_tf);
   p.interactive_markers = ReadParam(pnh, "interactive_markers", p.interactive_markers);
   p.floating_root = ReadParam(pnh, "floating_root", p.floating_root);
+  p.input_journal = ReadParam(pnh, "input_journal", p.input_journal);
+  p.replay_journal = ReadParam(pnh, "replay_journal", p.replay_journal);
   if (p.world_frame.empty()) throw std::invalid_argument("parameter ~world_frame must not be empty");
   std::string error;
   if (!p.options.IsValid(&error)) throw std::invalid_argument(error);

@@ -62,6 +62,8 @@ void SimNode::SetUpReconfigure() {
 
 void SimNode::OnReconfigure(SimNodeConfig& next) {
   std::lock_guard<std::mutex> lock(live_mutex_);
+  const LiveParams live_before = live_;
+  const StepperOptions options_before = live_options_;
   for (const LiveParamRange& range : LiveParamRanges()) {
     const double value = *ConfigField(&next, range.name);
     if (value == live_.*range.field) continue;
@@ -86,6 +88,12 @@ void SimNode::OnReconfigure(SimNodeConfig& next) {
     Refuse(error);
   }
   FillConfig(live_, live_options_, &next);  // what the client sees: the values in force
+  const bool physics_changed = live_.drive_stiffness != live_before.drive_stiffness ||
+                               live_.drive_damping != live_before.drive_damping ||
+                               live_.drag_frequency != live_before.drag_frequency ||
+                               live_options_.newton.tolerance != options_before.newton.tolerance ||
+                               live_options_.newton.max_iterations != options_before.newton.max_iterations;
+  if (physics_changed) PostBetweenSteps([this] { JournalUnreplayable("~set_parameters"); });
 }
 
 }  // namespace implicit_sim

@@ -96,6 +96,7 @@ bool SimNode::OnUnpause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
 bool SimNode::OnReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
   return RunBetweenSteps([&] {
            ResetWorld();
+           JournalUnreplayable("~reset");
            {
              std::lock_guard<std::mutex> lock(diag_mutex_);
              diag_.fault_holds = false;
@@ -111,6 +112,7 @@ bool SimNode::OnClearWrenches(std_srvs::Trigger::Request&, std_srvs::Trigger::Re
            const size_t n = world_->wrenches.size();
            world_->wrenches.clear();
            world_->commanded_W.setZero();
+           JournalUnreplayable("~clear_body_wrenches");
            res.success = true;
            res.message = "cleared " + std::to_string(n) + " timed wrenches and all wrench commands";
          }) || ShuttingDownAnswer(res);
@@ -133,6 +135,7 @@ bool SimNode::OnSetBodyState(implicit_sim::SetBodyState::Request& req, implicit_
            res.success =
                b >= 0 && conv::SetBodyStateFromMsg(*world_->model, b, req.state, &world_->state, &error);
            if (res.success) {
+             JournalUnreplayable("~set_body_state");
              ClearWarmStart(world_->data.get());  // the next step starts cold from the new configuration
              SaveSnapshot();
            }
@@ -165,6 +168,7 @@ bool SimNode::OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req,
            }
            if (req.duration > 0.0) w.end = w.start + req.duration;
            world_->wrenches.push_back(w);
+           JournalUnreplayable("~apply_body_wrench");
            res.success = true;
            res.message = "wrench on '" + req.body + "' from t = " + FormatNumber(w.start) + " s";
          }) || ShuttingDownAnswer(res);
@@ -172,24 +176,29 @@ bool SimNode::OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req,
 
 void SimNode::OnWrenchCommand(const implicit_sim::BodyWrench::ConstPtr& msg) {
   PostBetweenSteps([this, msg] {
-    const Vec3 f = conv::ToVec3(msg->wrench.force), tau = conv::ToVec3(msg->wrench.torque);
-    std::string error;
-    const int b = FindBodyOrFail(msg->body, true, &error);
-    if (b >= 0) CheckWrenchValues(f, tau, &error);
-    long dropped = 0;
-    {
-      std::lock_guard<std::mutex> lock(diag_mutex_);
-      ++diag_.received_wrench_commands;
-      if (!error.empty()) dropped = ++diag_.dropped_wrench_commands;
-    }
-    if (!error.empty()) {
-      ROS_WARN_THROTTLE(1.0, "implicit_sim: dropped ~wrench_cmd: %s (%ld dropped so far)", error.c_str(), dropped);
-      return;
-    }
-    const int v = Model::v_offset(world_->model->velocity_slot[b]);
-    world_->commanded_W.segment<3>(v) = f;
-    world_->commanded_W.segment<3>(v + 3) = tau;
+    Journal(JournalInput::kWrenchCommand, *msg);
+    ApplyWrenchCommand(*msg);
   });
+}
+
+void SimNode::ApplyWrenchCommand(const implicit_sim::BodyWrench& msg) {
+  const Vec3 f = conv::ToVec3(msg.wrench.force), tau = conv::ToVec3(msg.wrench.torque);
+  std::string error;
+  const int b = FindBodyOrFail(msg.body, true, &error);
+  if (b >= 0) CheckWrenchValues(f, tau, &error);
+  long dropped = 0;
+  {
+    std::lock_guard<std::mutex> lock(diag_mutex_);
+    ++diag_.received_wrench_commands;
+    if (!error.empty()) dropped = ++diag_.dropped_wrench_commands;
+  }
+  if (!error.empty()) {
+    ROS_WARN_THROTTLE(1.0, "implicit_sim: dropped ~wrench_cmd: %s (%ld dropped so far)", error.c_str(), dropped);
+    return;
+  }
+  const int v = Model::v_offset(world_->model->velocity_slot[b]);
+  world_->commanded_W.segment<3>(v) = f;
+  world_->commanded_W.segment<3>(v + 3) = tau;
 }
 
 bool SimNode::SetJointEfforts(const std::vector<std::string>& names, const std::vector<double>& efforts,
@@ -220,19 +229,24 @@ bool SimNode::SetJointEfforts(const std::vector<std::string>& names, const std::
 
 void SimNode::OnJointEffortCommand(const sensor_msgs::JointState::ConstPtr& msg) {
   PostBetweenSteps([this, msg] {
-    std::string error;
-    const bool ok = SetJointEfforts(msg->name, msg->effort, &error);
-    long dropped = 0;
-    {
-      std::lock_guard<std::mutex> lock(diag_mutex_);
-      ++diag_.received_joint_commands;
-      if (!ok) dropped = ++diag_.dropped_joint_commands;
-    }
-    if (!ok) {
-      ROS_WARN_THROTTLE(1.0, "implicit_sim: dropped ~joint_effort_cmd: %s (%ld dropped so far)", error.c_str(),
-                        dropped);
-    }
+    Journal(JournalInput::kJointEffortCommand, *msg);
+    ApplyJointEffortCommand(*msg);
   });
+}
+
+void SimNode::ApplyJointEffortCommand(const sensor_msgs::JointState& msg) {
+  std::string error;
+  const bool ok = SetJointEfforts(msg.name, msg.effort, &error);
+  long dropped = 0;
+  {
+    std::lock_guard<std::mutex> lock(diag_mutex_);
+    ++diag_.received_joint_commands;
+    if (!ok) dropped = ++diag_.dropped_joint_commands;
+  }
+  if (!ok) {
+    ROS_WARN_THROTTLE(1.0, "implicit_sim: dropped ~joint_effort_cmd: %s (%ld dropped so far)", error.c_str(),
+                      dropped);
+  }
 }
 
 bool SimNode::OnSetJointEfforts(implicit_sim::SetJointEfforts::Request& req,
@@ -240,6 +254,7 @@ bool SimNode::OnSetJointEfforts(implicit_sim::SetJointEfforts::Request& req,
   return RunBetweenSteps([&] {
            std::string error;
            res.success = SetJointEfforts(req.name, req.effort, &error);
+           if (res.success) JournalUnreplayable("~set_joint_efforts");
            res.message = res.success ? "set the effort of " + std::to_string(req.name.size()) + " joints" : error;
          }) || ShuttingDownAnswer(res);
 }

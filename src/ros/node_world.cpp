@@ -218,6 +218,7 @@ bool SimNode::OnSpawn(implicit_sim::Spawn::Request& req, implicit_sim::Spawn::Re
                return;
              }
              ReplaceWorld(std::move(next));
+             JournalUnreplayable("~spawn");
              res.bodies = added;
              res.success = true;
              res.message = "spawned " + std::to_string(added.size()) + " links";
@@ -235,6 +236,7 @@ bool SimNode::OnDelete(implicit_sim::Delete::Request& req, implicit_sim::Delete:
              const std::string urdf = RemoveFromScene(world_->urdf, req.bodies, &removed);
              std::unique_ptr<World> next = EditedWorld(urdf);
              ReplaceWorld(std::move(next));
+             JournalUnreplayable("~delete");
              res.deleted = removed;
              res.success = true;
              res.message = "deleted " + std::to_string(removed.size()) + " links";
@@ -266,6 +268,7 @@ bool SimNode::OnLoadScene(implicit_sim::LoadScene::Request& req, implicit_sim::L
            const std::string name = next->model->scene_name;
            const int moving = next->model->num_moving();
            ReplaceWorld(std::move(next));
+           JournalUnreplayable("~load_scene");
            res.success = true;
            res.message = "loaded scene '" + name + "' (" + std::to_string(moving) + " moving bodies) at t = " +
                          FormatNumber(SimTime()) + " s";

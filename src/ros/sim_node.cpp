@@ -26,6 +26,9 @@ constexpr double kShutdownGraceS = 2.0;
 // /clock from the physics thread: at most ~clock_rate messages per second of simulation time and at most this many
 // per second of wall time (as fast as possible, sim time runs hundreds of times faster than the wall).
 constexpr double kMaxClockWallRate = 1000.0;  // Hz
+// At real time, a simulation that fell behind by more than this (s of wall time; a slow step) goes on at the real-time
+// pace from where it is instead of catching up in a burst faster than real time.
+constexpr double kMaxPaceLagS = 0.1;
 
 double WallSeconds() { return std::chrono::duration<double>(WallClock::now().time_since_epoch()).count(); }
 
@@ -48,6 +51,7 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
       live_options_(params_.options),
       diagnostics_(nh, pnh) {
   world_ = BuildWorld(ReadNodeScene(nh, params_));
+  OpenJournals();
   PublishRobotDescription(world_->urdf);
   const Model& model = *world_->model;
   paused_ = params_.paused;
@@ -184,6 +188,11 @@ void SimNode::StepOnce(double rtf) {
     options_.newton.tolerance = live_options_.newton.tolerance;
     options_.newton.max_iterations = live_options_.newton.max_iterations;
   }
+  std::string replay_refusal;
+  if (replay_ && !ReplayJournalInputs(&replay_refusal)) {
+    RefuseReplayStep(replay_refusal);
+    return;
+  }
   ComputeWrenches();
   World& w = *world_;
   StepReport report;
@@ -234,6 +243,20 @@ void SimNode::StepOnce(double rtf) {
   SaveSnapshot();
   PublishClockThrottled(SimTime(), !report.advanced);
   PublishStepStats(report, SimTime(), step_count_, rtf);
+}
+
+// The replay cannot go on: pause (and end a ~step or ~run_steps job) before the step, which is not taken.
+void SimNode::RefuseReplayStep(const std::string& refusal) {
+  paused_ = true;
+  ROS_ERROR("implicit_sim: replay stops: %s; the simulation is paused", refusal.c_str());
+  {
+    std::lock_guard<std::mutex> lock(diag_mutex_);
+    diag_.paused = true;
+    diag_.fault_holds = true;
+    diag_.last_failure = refusal;
+  }
+  std::lock_guard<std::mutex> lock(mailbox_mutex_);
+  if (job_.active) FinishJobLocked(false, "stopped after " + std::to_string(job_.done) + " steps: " + refusal);
 }
 
 void SimNode::ResetWorld() {
@@ -331,12 +354,29 @@ void SimNode::PhysicsLoop() {
       pace_wall = now;
       pace_sim = sim;
     }
-    if (real_time_factor > 0.0) {  // pace, but answer commands meanwhile
+    if (real_time_factor > 0.0) {
       const std::chrono::duration<double> ahead((sim - pace_sim) / real_time_factor);  // s of wall time
-      const auto until = pace_wall + std::chrono::duration_cast<WallClock::duration>(ahead);
-      std::unique_lock<std::mutex> lock(mailbox_mutex_);
-      mailbox_cv_.wait_until(lock, until, [this] { return stopping_ || !commands_.empty(); });
+      const auto due = pace_wall + std::chrono::duration_cast<WallClock::duration>(ahead);
+      if (now - due > std::chrono::duration<double>(kMaxPaceLagS)) {  // fell behind: go on from here, no burst
+        pace_wall = now;
+        pace_sim = sim;
+      } else {
+        WaitForPace(due);
+      }
     }
+  }
+}
+
+// Sleeps until `until`, the wall time at which the simulation is due, running the commands that arrive meanwhile:
+// a stream of commands must neither wait for the next step nor make the simulation run ahead of the wall clock.
+void SimNode::WaitForPace(std::chrono::steady_clock::time_point until) {
+  std::unique_lock<std::mutex> lock(mailbox_mutex_);
+  while (mailbox_cv_.wait_until(lock, until, [this] { return stopping_ || !commands_.empty(); })) {
+    if (stopping_) return;
+    lock.unlock();
+    RunCommands();
+    lock.lock();
+    if (paused_ || restart_pacing_) return;  // ~pause, ~reset or a new world: the loop decides what comes next
   }
 }
 

@@ -59,6 +59,8 @@ struct NodeParams {
   bool interactive_markers = true;
   // A scene whose root link is not `world` (a robot URDF): false welds the root to the world, true makes it free.
   bool floating_root = false;  // an interactive marker per moving body (~drag) that pushes it with the mouse
+  // The input journal (ros/input_journal.h): a file to record every applied command into, and one to replay.
+  std::string input_journal, replay_journal;
   // Reads and validates; throws std::invalid_argument naming the parameter and its range, or an unknown private
   // parameter (a misspelt name would otherwise be ignored silently).
   static NodeParams Read(const ros::NodeHandle& pnh);

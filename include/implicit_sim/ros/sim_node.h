@@ -10,6 +10,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <functional>
 #include <set>
@@ -47,6 +48,7 @@
 #include "implicit_sim/core/model/model.h"
 #include "implicit_sim/core/model/urdf_loader.h"
 #include "implicit_sim/core/step/time_stepper.h"
+#include "implicit_sim/ros/input_journal.h"
 #include "implicit_sim/ros/node_params.h"
 
 namespace implicit_sim {
@@ -251,6 +253,24 @@ class SimNode {
   bool OnSetBodyState(implicit_sim::SetBodyState::Request& req, implicit_sim::SetBodyState::Response& res);
   bool OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req, implicit_sim::ApplyBodyWrench::Response& res);
   void OnWrenchCommand(const implicit_sim::BodyWrench::ConstPtr& msg);
+  void ApplyWrenchCommand(const implicit_sim::BodyWrench& msg);  // physics thread
+  void ApplyJointEffortCommand(const sensor_msgs::JointState& msg);  // physics thread
+  void ApplyJointCommandCounted(const implicit_sim::JointCommand& msg);  // physics thread
+  void StartTrajectoryCounted(const trajectory_msgs::JointTrajectory& msg);  // physics thread
+  // The input journal (physics thread): record a command topic's message, or mark an input it cannot replay.
+  template <typename Message>
+  void Journal(JournalInput kind, const Message& msg) {
+    if (journal_) journal_->Write(step_count_, kind, msg);
+  }
+  void JournalUnreplayable(const char* input) {
+    if (journal_) journal_->WriteUnreplayable(step_count_, input);
+  }
+  void OpenJournals();  // node_journal.cpp; throws std::invalid_argument for a file it cannot create or read
+  // Applies the replayed journal's inputs for the step about to start; false (with the reason) at an input it cannot
+  // replay.
+  bool ReplayJournalInputs(std::string* refusal);
+  void RefuseReplayStep(const std::string& refusal);
+  void WaitForPace(std::chrono::steady_clock::time_point until);  // physics thread, between paced steps
   bool SetJointEfforts(const std::vector<std::string>& names, const std::vector<double>& efforts,
                        std::string* error);  // all or nothing; physics thread
   void OnJointEffortCommand(const sensor_msgs::JointState::ConstPtr& msg);
@@ -265,6 +285,8 @@ class SimNode {
   double time_offset_ = 0.0;      // simulation time = time_offset_ + state.t (reset keeps time monotonic)
   bool paused_ = false, restart_pacing_ = true;
   uint64_t step_count_ = 0;
+  std::unique_ptr<InputJournalWriter> journal_;  // ~input_journal
+  std::unique_ptr<InputJournalReader> replay_;   // ~replay_journal
   uint64_t snapshot_version_ = 0;
   bool stepped_ = false;          // a step has run since startup or the last reset
   double rtf_ = 0.0;

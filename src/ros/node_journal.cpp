@@ -1,0 +1,41 @@
+// The node's input journal (doc/ros_node.md#the-input-journal): ~input_journal records the command topics' messages
+// as the physics thread applies them, with the step they precede; ~replay_journal applies a recorded journal's
+// messages before the same steps, so a replaying node reaches the recorded run's state bit for bit.
+#include "implicit_sim/ros/sim_node.h"  // first: its generated service type Step precedes the core's function Step
+
+namespace implicit_sim {
+
+void SimNode::OpenJournals() {
+  if (!params_.replay_journal.empty()) {
+    replay_ = std::make_unique<InputJournalReader>(params_.replay_journal);
+    ROS_INFO("implicit_sim: replaying %zu inputs of '%s' (the last before step %lu)", replay_->size(),
+             params_.replay_journal.c_str(), static_cast<unsigned long>(replay_->last_step()));
+  }
+  if (!params_.input_journal.empty()) journal_ = std::make_unique<InputJournalWriter>(params_.input_journal);
+}
+
+bool SimNode::ReplayJournalInputs(std::string* refusal) {
+  while (const JournalRecord* record = replay_->Next(step_count_)) {
+    switch (record->kind) {
+      case JournalInput::kWrenchCommand:
+        ApplyWrenchCommand(record->Decode<implicit_sim::BodyWrench>());
+        break;
+      case JournalInput::kJointCommand:
+        ApplyJointCommandCounted(record->Decode<implicit_sim::JointCommand>());
+        break;
+      case JournalInput::kJointEffortCommand:
+        ApplyJointEffortCommand(record->Decode<sensor_msgs::JointState>());
+        break;
+      case JournalInput::kJointTrajectory:
+        StartTrajectoryCounted(record->Decode<trajectory_msgs::JointTrajectory>());
+        break;
+      case JournalInput::kUnreplayable:
+        *refusal = "the journal's input " + record->Text() + " before step " + std::to_string(record->step) +
+                   " cannot be replayed";
+        return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace implicit_sim
