@@ -6,6 +6,8 @@ WS=${IMPLICIT_SIM_WS:-/tmp/implicit_sim_ws}
 export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
 export ROS_HOME=$WS/.ros ROS_LOG_DIR=$WS/.ros/log ROS_HOSTNAME=localhost
 
+# munge, slurmctld, slurmd, slurm-client and openssh-server: test_batch_engines starts a one-node Slurm and an sshd of
+# its own (test/batch/local_slurm.sh, local_sshd.sh); the packages' services are not started by the test.
 APT_PACKAGES="build-essential cmake pkg-config googletest libgtest-dev catkin libroscpp-dev libtf2-ros-dev
   libgeometry-msgs-dev ros-geometry-msgs libsensor-msgs-dev ros-sensor-msgs libvisualization-msgs-dev libstd-msgs-dev ros-std-msgs libstd-srvs-dev
   libros-rosgraph-msgs-dev ros-message-generation ros-message-runtime librostest-dev python3-rostest
@@ -17,7 +19,8 @@ APT_PACKAGES="build-essential cmake pkg-config googletest libgtest-dev catkin li
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
   libinteractive-markers-dev python3-interactive-markers libroslib-dev
   libassimp-dev libqhull-dev ros-robot-state-publisher python3-tf2-ros
-  libtrajectory-msgs-dev ros-trajectory-msgs python3-trajectory-msgs"
+  libtrajectory-msgs-dev ros-trajectory-msgs python3-trajectory-msgs
+  munge slurmctld slurmd slurm-client openssh-server"
 
 install_packages() {
   local missing=""

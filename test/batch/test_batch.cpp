@@ -258,48 +258,6 @@ TEST(BatchStudy, TheSlurmScriptPassesADryCheckAndEachArrayIndexRunsItsSample) {
   EXPECT_NE(merge_err.find("37 samples have no line yet"), std::string::npos) << merge_err;
 }
 
-// --sshlogin: GNU parallel sends the samples to the hosts of the login list over ssh. PARALLEL_SSH points GNU
-// parallel at a stand-in for ssh that logs the host and runs the remote command here, so both "hosts" get samples
-// through the same quoting and transport path a real ssh takes. Like sshd, the stand-in gives the remote command a
-// SHELL (GNU parallel's remote wrapper runs the job with $SHELL and does nothing without it; CI runs without one).
-TEST(BatchStudy, AnSshLoginListSpreadsTheSamplesOverTheHosts) {
-  const std::vector<std::string> reference = Lines(FortySampleRun());
-  ASSERT_EQ(reference.size(), 40u);
-  const std::string out = TempDir("ssh");
-  const std::string fake_ssh = out + ".ssh", log = out + ".ssh.log";
-  std::ofstream(fake_ssh) << "#!/bin/bash\n"
-                             "echo \"$1\" >> " << log << "\n"
-                             "export SHELL=/bin/bash\n"
-                             "while [ $# -gt 0 ]; do\n"
-                             "  case \"$1\" in --) shift; break;; -*) shift;; *) shift; break;; esac\n"
-                             "done\n"
-                             "[ \"${1:-}\" = -- ] && shift\n"
-                             "exec bash -c \"$*\"\n";
-  ASSERT_EQ(Shell("chmod +x " + fake_ssh), 0);
-  ASSERT_EQ(Batch(kCubeSweep + " --out " + out + " --samples 6 --sshlogin 1/hostA,1/hostB", out,
-                  "PARALLEL_SSH=" + fake_ssh),
-            0)
-      << Read(out + ".err") << Read(out + "/parallel.joblog");
-  const std::vector<std::string> lines = Lines(Read(out + "/results.jsonl"));
-  ASSERT_EQ(lines.size(), 6u);
-  for (size_t i = 0; i < lines.size(); ++i) EXPECT_EQ(lines[i], reference[i]);
-  const std::string hosts = Read(log);
-  EXPECT_NE(hosts.find("hostA"), std::string::npos) << hosts;
-  EXPECT_NE(hosts.find("hostB"), std::string::npos) << hosts;
-
-  // A host whose jobs exit 0 but whose lines never reach DIR (DIR not shared with it): the samples are reported
-  // missing with the host named, not silently lost.
-  const std::string lost = TempDir("ssh_lost"), lossy_ssh = lost + ".ssh";
-  std::ofstream(lossy_ssh) << "#!/bin/bash\nexit 0\n";
-  ASSERT_EQ(Shell("chmod +x " + lossy_ssh), 0);
-  EXPECT_EQ(Batch(kCubeSweep + " --out " + lost + " --samples 2 --sshlogin 1/hostC --no-report", lost,
-                  "PARALLEL_SSH=" + lossy_ssh),
-            1);
-  const std::string lost_err = Read(lost + ".err");
-  EXPECT_NE(lost_err.find("2 samples (0, 1) exited 0 on host 'hostC' but left no line"), std::string::npos)
-      << lost_err;
-}
-
 TEST(BatchStudy, TheCylinderSweepClassifiesEverySample) {
   const std::string out = TempDir("cylinder");
   const int status = Batch(kCylinderSweep + " --out " + out + " --jobs 2 --samples 24", out);
