@@ -227,7 +227,8 @@ def final_state(names):
         res = get(name)
         if not res.success:
             raise RuntimeError("~get_body_state %s: %s" % (name, res.message))
-        p, o, v, w = res.state.pose.position, res.state.pose.orientation, res.state.twist.linear, res.state.twist.angular
+        pose, twist = res.state.pose, res.state.twist
+        p, o, v, w = pose.position, pose.orientation, twist.linear, twist.angular
         state[name] = [p.x, p.y, p.z, o.w, o.x, o.y, o.z, v.x, v.y, v.z, w.x, w.y, w.z]
     return state
 

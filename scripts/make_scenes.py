@@ -166,10 +166,10 @@ def soak_bin():
     half_pi = "1.5707963267948966"
     parts = ['<?xml version="1.0"?>\n',
              "<!-- Soak benchmark scene (bench/implicit_sim_soak.py, doc/scenes.md): 20 spheres (r = 0.05 m, 0.1 kg)\n"
-             "     resting in a 1 m x 1 m box of half-spaces, and a gripper of rounded boxes above them: a carriage on\n"
-             "     the vertical prismatic joint 'lift', a palm on the revolute joint 'wrist' (about z), two fingers on\n"
-             "     the prismatic joints 'left_slide' and 'right_slide'. The finger tips are 0.31 m + lift above the\n"
-             "     floor: below the tops of the spheres for lift < -0.21 m.\n"
+             "     resting in a 1 m x 1 m box of half-spaces, and a gripper of rounded boxes above them: a\n"
+             "     carriage on the vertical prismatic joint 'lift', a palm on the revolute joint 'wrist' (about\n"
+             "     z), two fingers on the prismatic joints 'left_slide' and 'right_slide'. The finger tips are\n"
+             "     0.31 m + lift above the floor: below the tops of the spheres for lift < -0.21 m.\n"
              "     Written by scripts/make_scenes.py. -->\n",
              '<robot name="soak_bin">\n  <implicit_sim gravity="0 0 -9.81">\n'
              '    <friction mu="0.5" e_t="1" e_o="1" e_r="0.01"/>\n  </implicit_sim>\n  <link name="world"/>\n',
