@@ -29,7 +29,7 @@ bool KnownKind(uint8_t kind) {
 }  // namespace
 
 InputJournalWriter::InputJournalWriter(const std::string& path)
-    : out_(path, std::ios::binary | std::ios::trunc), path_(path) {
+    : out_(path, std::ios::binary | std::ios::trunc) {
   if (!out_) throw std::invalid_argument("~input_journal: cannot create '" + path + "'");
   out_.write(kHeader, kHeaderSize);
   out_.flush();

@@ -3,6 +3,8 @@
 // messages before the same steps, so a replaying node reaches the recorded run's state bit for bit.
 #include "implicit_sim/ros/sim_node.h"  // first: its generated service type Step precedes the core's function Step
 
+#include <stdexcept>
+
 namespace implicit_sim {
 
 void SimNode::OpenJournals() {
@@ -15,27 +17,37 @@ void SimNode::OpenJournals() {
 }
 
 bool SimNode::ReplayJournalInputs(std::string* refusal) {
-  while (const JournalRecord* record = replay_->Next(step_count_)) {
-    switch (record->kind) {
-      case JournalInput::kWrenchCommand:
-        ApplyWrenchCommand(record->Decode<implicit_sim::BodyWrench>());
-        break;
-      case JournalInput::kJointCommand:
-        ApplyJointCommandCounted(record->Decode<implicit_sim::JointCommand>());
-        break;
-      case JournalInput::kJointEffortCommand:
-        ApplyJointEffortCommand(record->Decode<sensor_msgs::JointState>());
-        break;
-      case JournalInput::kJointTrajectory:
-        StartTrajectoryCounted(record->Decode<trajectory_msgs::JointTrajectory>());
-        break;
-      case JournalInput::kUnreplayable:
-        *refusal = "the journal's input " + record->Text() + " before step " + std::to_string(record->step) +
-                   " cannot be replayed";
-        return false;
+  try {
+    while (const JournalRecord* record = replay_->Next(step_count_)) {
+      if (!ApplyJournalRecord(*record, refusal)) return false;
     }
+  } catch (const std::exception& e) {  // a skipped step, or a record whose bytes are no message of its kind
+    *refusal = e.what();
+    return false;
   }
   return true;
+}
+
+bool SimNode::ApplyJournalRecord(const JournalRecord& record, std::string* refusal) {
+  switch (record.kind) {
+    case JournalInput::kWrenchCommand:
+      ApplyWrenchCommand(record.Decode<implicit_sim::BodyWrench>());
+      return true;
+    case JournalInput::kJointCommand:
+      ApplyJointCommandCounted(record.Decode<implicit_sim::JointCommand>());
+      return true;
+    case JournalInput::kJointEffortCommand:
+      ApplyJointEffortCommand(record.Decode<sensor_msgs::JointState>());
+      return true;
+    case JournalInput::kJointTrajectory:
+      StartTrajectoryCounted(record.Decode<trajectory_msgs::JointTrajectory>());
+      return true;
+    case JournalInput::kUnreplayable:
+      break;
+  }
+  *refusal = "the journal's input " + record.Text() + " before step " + std::to_string(record.step) +
+             " cannot be replayed";
+  return false;
 }
 
 }  // namespace implicit_sim

@@ -61,7 +61,6 @@ class InputJournalWriter {
 
   std::mutex mutex_;
   std::ofstream out_;
-  std::string path_;
 };
 
 // Reads a whole journal at construction and hands its records out in order, step by step.

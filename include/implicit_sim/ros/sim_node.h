@@ -269,6 +269,7 @@ class SimNode {
   // Applies the replayed journal's inputs for the step about to start; false (with the reason) at an input it cannot
   // replay.
   bool ReplayJournalInputs(std::string* refusal);
+  bool ApplyJournalRecord(const JournalRecord& record, std::string* refusal);
   void RefuseReplayStep(const std::string& refusal);
   void WaitForPace(std::chrono::steady_clock::time_point until);  // physics thread, between paced steps
   bool SetJointEfforts(const std::vector<std::string>& names, const std::vector<double>& efforts,
