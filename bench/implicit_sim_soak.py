@@ -25,6 +25,7 @@ import threading
 import time
 
 import actionlib
+import rosgraph
 import rospy
 from rosgraph_msgs.msg import Log
 
@@ -209,6 +210,26 @@ def stop(process, timeout=15.0):
         return process.wait()
 
 
+def wait_for_master(timeout=30.0):
+    master = rosgraph.Master("/implicit_sim_soak")
+    deadline = time.monotonic() + timeout
+    while not master.is_online():
+        if time.monotonic() > deadline:
+            raise RuntimeError("the ROS master at %s did not come up in %g s" % (os.environ["ROS_MASTER_URI"], timeout))
+        time.sleep(0.1)
+
+
+def wait_for_closed_bag(path, timeout=60.0):
+    """Whether rosbag record closed the bag (renamed PATH.active to PATH) within timeout: the recorder's C++ child
+    may still be writing after the rosbag wrapper exited."""
+    deadline = time.monotonic() + timeout
+    while os.path.exists(path + ".active") or not os.path.exists(path):
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.1)
+    return True
+
+
 def wait_for_service(name, timeout=30.0):
     rospy.wait_for_service(name, timeout=timeout)
     return rospy.ServiceProxy(name, GetBodyState if name.endswith("get_body_state") else Trigger)
@@ -242,7 +263,8 @@ def node_command(args, extra):
 def live_run(args, env, emit):
     """The live run: node, recorder and commands for --duration; returns (metrics, final state, steps)."""
     journal = os.path.join(args.out, "inputs.journal")
-    node = start(node_command(args, ["_real_time_factor:=1", "_input_journal:=" + journal]),
+    # Paused until the first drive targets are in: otherwise the gripper falls onto the spheres before they arrive.
+    node = start(node_command(args, ["_paused:=true", "_real_time_factor:=1", "_input_journal:=" + journal]),
                  os.path.join(args.out, "node.log"), env)
     recorder = None
     try:
@@ -253,6 +275,10 @@ def live_run(args, env, emit):
         time.sleep(1.0)  # the recorder subscribes
         commander = Commander(args.rate, args.hold, args.seed)
         commander.start()
+        time.sleep(0.5)  # the first commands reach the node
+        unpaused = wait_for_service(NODE + "/unpause")()
+        if not unpaused.success:
+            raise RuntimeError("~unpause: " + unpaused.message)
         begin, rss_points = time.monotonic(), []
         with monitor.lock:
             first_step = monitor.last_step
@@ -278,7 +304,11 @@ def live_run(args, env, emit):
             raise RuntimeError("~pause: " + paused.message)
         time.sleep(1.0)  # the last ~step_stats arrive
         state = final_state(names)
+        with open(os.path.join(args.out, "live_state.json"), "w") as f:  # for a look after the run
+            json.dump({"steps": monitor.last_step, "bodies": state}, f)
         recorder_exit = stop(recorder)
+        bag = os.path.join(args.out, "soak.bag")
+        bag_closed = wait_for_closed_bag(bag)
         stop(node)
         rospy.delete_param(NODE)  # the replaying node must not inherit ~input_journal (it would truncate the file)
         with monitor.lock:
@@ -288,7 +318,8 @@ def live_run(args, env, emit):
                        "error_texts": monitor.error_texts[:10], "step_ms": percentiles(monitor.step_ms)}
         metrics["bag_drop_warnings"] = count_drops(args.out)
         metrics["recorder_exit"] = recorder_exit
-        metrics["bag_mb"] = round(os.path.getsize(os.path.join(args.out, "soak.bag")) / 2 ** 20, 2)
+        metrics["bag_closed"] = bag_closed
+        metrics["bag_mb"] = round(os.path.getsize(bag if bag_closed else bag + ".active") / 2 ** 20, 2)
         metrics["journal_mb"] = round(os.path.getsize(journal) / 2 ** 20, 3)
         metrics["rss_start_mb"] = round(rss_points[0][1], 3)
         metrics["rss_end_mb"] = round(rss_points[-1][1], 3)
@@ -337,8 +368,8 @@ def main(argv=None):
         env["ROS_MASTER_URI"] = "http://localhost:%d" % free_port()
         master = start(["rosmaster", "--core", "-p", env["ROS_MASTER_URI"].rsplit(":", 1)[1]],
                        os.path.join(args.out, "master.log"), env)
-        time.sleep(1.5)
     os.environ.update(env)
+    wait_for_master()
     jsonl = open(os.path.join(args.out, "soak.jsonl"), "w")
 
     def emit(line):
@@ -356,7 +387,8 @@ def main(argv=None):
                              "message": result.message if result else "no result",
                              "bodies": len(live_state), "equal": live_state == replay_state,
                              "max_abs_diff": max(diffs) if diffs else None, "wall_s": round(replay_wall, 2)}
-        ok = metrics["error_logs"] == 0 and metrics["bag_drop_warnings"] == 0 and metrics["replay"]["equal"]
+        ok = (metrics["error_logs"] == 0 and metrics["bag_drop_warnings"] == 0 and metrics["bag_closed"] and
+              metrics["replay"]["equal"])
         emit(dict({"bench": "soak", "event": "summary", "ok": ok}, **metrics))
         return 0 if ok else 1
     finally:

@@ -32,6 +32,7 @@ class SoakShort(unittest.TestCase):
         self.assertEqual(summary["error_logs"], 0, summary["error_texts"])
         self.assertEqual(summary["bag_drop_warnings"], 0)
         self.assertEqual(summary["recorder_exit"], 0)
+        self.assertTrue(summary["bag_closed"])
         self.assertEqual(summary["refused_steps"], 0)
         self.assertGreater(summary["commands_sent"], 0.9 * 2 * 100 * DURATION_S)  # a wrench and a joint command at 100 Hz
         self.assertGreater(summary["journal_mb"], 0.5)
