@@ -36,8 +36,10 @@ from std_srvs.srv import Trigger
 NODE = "/implicit_sim"
 BALLS = ["ball_%d" % i for i in range(20)]
 JOINTS = ["lift", "wrist", "left_slide", "right_slide"]
-# Drive targets are drawn in these ranges (m or rad) and held for --hold seconds, with a small jitter per command.
-TARGETS = {"lift": (-0.24, 0.0), "wrist": (-1.5, 1.5), "left_slide": (-0.025, 0.06), "right_slide": (-0.06, 0.025)}
+# Drive targets are drawn in these ranges (m or rad) and held for --hold seconds, with a small jitter per command. The
+# lowest lift puts the finger tips 5 mm below the tops of the spheres: the fingers press and push them. Deeper, among
+# the spheres, jams of fingers, spheres and walls cost seconds per step (bench/README.md#soak-benchmark).
+TARGETS = {"lift": (-0.215, 0.0), "wrist": (-1.5, 1.5), "left_slide": (-0.025, 0.06), "right_slide": (-0.06, 0.025)}
 JITTER = {"lift": 0.002, "wrist": 0.01, "left_slide": 0.002, "right_slide": 0.002}
 STIFFNESS = {"lift": 2000.0, "wrist": 20.0, "left_slide": 500.0, "right_slide": 500.0}  # N/m or N m/rad
 DAMPING = {"lift": 100.0, "wrist": 0.6, "left_slide": 10.0, "right_slide": 10.0}        # N s/m or N m s/rad
