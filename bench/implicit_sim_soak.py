@@ -1,14 +1,14 @@
 #!/usr/bin/python3
 """Soak benchmark: implicit_sim_node at real time for a long run, driven and recorded, then replayed headless.
 
-The node runs scenes/soak_bin.urdf (20 spheres in a box and a four-joint gripper among them) at real time while this
+The node runs scenes/soak_bin.urdf (20 spheres in a box and a four-joint gripper above them) at real time while this
 script sends a random ~wrench_cmd and a random ~joint_command at --rate Hz and rosbag records the node's topics and the
 commands. The node writes its input journal (~input_journal). JSON lines on stdout (and in OUT/soak.jsonl): one
 "sample" line every --sample-period seconds (the node's RSS, step times of the window, log and drop counts so far),
 then one "summary" line: RSS growth per hour after --warmup (least squares), error-level log messages, rosbag drop
 warnings, step-time percentiles, and the replay: a second node replays the journal headless (~replay_journal, ~run_steps
 as fast as possible) and its final state must equal the live run's bit for bit. Exit status 0 when there were no
-error-level logs, no drops and the replay is equal; 1 otherwise; 2 for bad arguments.
+error-level logs, no drops, the bag was closed and the replay is equal; 1 otherwise; 2 for bad arguments.
 
 Usage (a built workspace sourced): bench/implicit_sim_soak.py [--duration S] [--out DIR] [--master own|existing] ...
 bench/README.md#soak-benchmark documents it and the figures of a one-hour run.
@@ -34,7 +34,6 @@ from implicit_sim.srv import GetBodyState
 from std_srvs.srv import Trigger
 
 NODE = "/implicit_sim"
-BALLS = ["ball_%d" % i for i in range(20)]
 JOINTS = ["lift", "wrist", "left_slide", "right_slide"]
 # Drive targets are drawn in these ranges (m or rad) and held for --hold seconds, with a small jitter per command. The
 # lowest lift puts the finger tips 5 mm below the tops of the spheres: the fingers press and push them. Deeper, among
