@@ -20,49 +20,19 @@
 
 #include <gtest/gtest.h>
 
+#include "batch_test_support.h"
+
 namespace {
 
-const std::string kSource = IMPLICIT_SIM_SOURCE_DIR;
-const std::string kRunner = IMPLICIT_SIM_RUNNER;
-const std::string kBatch = "/usr/bin/python3 " + kSource + "/scripts/implicit_sim_batch";
-const std::string kCubeSweep = kSource + "/scenes/sweeps/cube_drop.yaml";
+using namespace batch_test;  // NOLINT: the shared helpers read as this file's own
+
 const std::string kCylinderSweep = kSource + "/scenes/sweeps/cylinder_drop.yaml";
 const std::string kPileSweep = kSource + "/scenes/sweeps/pile_ellipsoid50.yaml";
 const std::string kMakePile = kRunner.substr(0, kRunner.rfind('/')) + "/implicit_sim_make_pile";  // built beside it
 
-int Shell(const std::string& command) {
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-std::string Read(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-std::vector<std::string> Lines(const std::string& text) {
-  std::vector<std::string> lines;
-  std::istringstream in(text);
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
-}
-
 bool Exists(const std::string& path) {
   struct stat st;
   return ::stat(path.c_str(), &st) == 0;
-}
-
-std::string TempDir(const std::string& name) {
-  const std::string dir = ::testing::TempDir() + "implicit_sim_batch_" + name;
-  Shell("rm -rf '" + dir + "'");
-  return dir;
-}
-
-// Runs implicit_sim_batch with `args` (the runner given explicitly); stdout and stderr go to DIR.log files.
-int Batch(const std::string& args, const std::string& log, const std::string& env = "") {
-  return Shell(env + " " + kBatch + " " + args + " --runner " + kRunner + " > " + log + ".out 2> " + log + ".err");
 }
 
 std::string Field(const std::string& line, const std::string& key) {

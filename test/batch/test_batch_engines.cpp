@@ -18,45 +18,15 @@
 
 #include <gtest/gtest.h>
 
+#include "batch_test_support.h"
+
 namespace {
 
-const std::string kSource = IMPLICIT_SIM_SOURCE_DIR;
-const std::string kRunner = IMPLICIT_SIM_RUNNER;
-const std::string kBatch = "/usr/bin/python3 " + kSource + "/scripts/implicit_sim_batch";
-const std::string kCubeSweep = kSource + "/scenes/sweeps/cube_drop.yaml";
+using namespace batch_test;  // NOLINT: the shared helpers read as this file's own
+
 const std::string kLocalSlurm = kSource + "/test/batch/local_slurm.sh";
 const std::string kLocalSshd = kSource + "/test/batch/local_sshd.sh";
 constexpr int kSamples = 16;  // each cube sample runs in about a second
-
-int Shell(const std::string& command) {
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-std::string Read(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-std::vector<std::string> Lines(const std::string& text) {
-  std::vector<std::string> lines;
-  std::istringstream in(text);
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
-}
-
-std::string TempDir(const std::string& name) {
-  const std::string dir = ::testing::TempDir() + "implicit_sim_engines_" + name;
-  Shell("rm -rf '" + dir + "'");
-  return dir;
-}
-
-// Runs implicit_sim_batch with `args` (the runner given explicitly); stdout and stderr go to LOG.out and LOG.err.
-int Batch(const std::string& args, const std::string& log, const std::string& env = "") {
-  return Shell(env + " " + kBatch + " " + args + " --runner " + kRunner + " > " + log + ".out 2> " + log + ".err");
-}
 
 // The merged file of the first kSamples cube samples through GNU parallel on this machine (once per process).
 const std::string& LocalRun() {
