@@ -47,12 +47,24 @@ py::dict ContactArrays(const Data& data) {
                   py::arg("slip_speed") = slip_speed);
 }
 
+constexpr const char* kDataBusy = "this Data is being stepped in another thread: give each thread a Data of its own";
+
+// ValueError while another thread steps this Data (with the GIL released).
+void CheckNotStepping(const PyData& data) {
+  if (data.stepping) throw py::value_error(kDataBusy);
+}
+
 // Step with the external wrench and joint efforts of this step (either may be None), the GIL released while the core
 // steps. The inputs are checked before the state is touched.
 StepReport StepOnce(const Model& model, const StepperOptions& options, PyState* state, PyData* data,
                     const py::object& wrench, const py::object& joint_efforts) {
   CheckSameModel(state->model, model, "State");
   CheckSameModel(data->model, model, "Data");
+  if (data->stepping.exchange(true)) throw py::value_error(kDataBusy);
+  struct Done {
+    std::atomic<bool>* stepping;
+    ~Done() { *stepping = false; }
+  } done{&data->stepping};
   const Eigen::VectorXd* wrench_W = nullptr;
   if (!wrench.is_none() || !joint_efforts.is_none()) {
     if (!wrench.is_none()) {
@@ -76,6 +88,7 @@ StepReport StepOnce(const Model& model, const StepperOptions& options, PyState* 
 void SetJointDrive(PyData* self, int joint, double position_target, double velocity_target, double stiffness,
                    double damping) {
   const Model& model = *self->model;
+  CheckNotStepping(*self);
   CheckJointIndex(model, joint);
   JointDrive drive;
   drive.position_target = position_target;
@@ -140,7 +153,10 @@ void BindStep(py::module_& m) {
              return std::make_unique<PyData>(model, ParsePairSelection(pair_selection));
            }),
            py::arg("model"), py::arg("pair_selection") = "auto")
-      .def_property_readonly("contacts", [](const PyData& d) { return ContactArrays(d.data); },
+      .def_property_readonly("contacts", [](const PyData& d) {
+        CheckNotStepping(d);
+        return ContactArrays(d.data);
+      },
                              "the last step's contact results, one row per pair in its NCP: pair (model pair index), "
                              "gap (m), n_W (unit, body 2 to body 1), p_WA1, p_WA2 (closest points, m), normal_force "
                              "(N), friction_force_W (on body 1, N), torsional_moment (N m), slip_speed (m/s)")
@@ -163,16 +179,21 @@ void BindStep(py::module_& m) {
       .def_readonly("valid", &WarmStart::valid)
       .def_readonly("pairs", &WarmStart::pairs);
   m.def("save_warm_start", [](const PyData& d) {
+    CheckNotStepping(d);
     WarmStart saved;
     SaveWarmStart(d.data, &saved);
     return saved;
   }, py::arg("data"));
   m.def("restore_warm_start", [](const Model& model, const WarmStart& saved, PyData* d) {
     CheckSameModel(d->model, model, "Data");
+    CheckNotStepping(*d);
     RestoreWarmStart(model, saved, &d->data);
   }, py::arg("model"), py::arg("saved"), py::arg("data"),
         "with the State saved at the same time, the run continues bit-identically");
-  m.def("clear_warm_start", [](PyData* d) { ClearWarmStart(&d->data); }, py::arg("data"),
+  m.def("clear_warm_start", [](PyData* d) {
+    CheckNotStepping(*d);
+    ClearWarmStart(&d->data);
+  }, py::arg("data"),
         "the next step starts cold, like the first step of a new Data");
   m.def("step", &StepOnce, py::arg("model"), py::arg("options"), py::arg("state"), py::arg("data"),
         py::arg("wrench") = py::none(), py::arg("joint_efforts") = py::none(),

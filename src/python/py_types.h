@@ -2,6 +2,7 @@
 // check it and keep it alive), and the numpy views and copies they hand out.
 #pragma once
 
+#include <atomic>
 #include <memory>
 #include <string>
 
@@ -32,6 +33,8 @@ struct PyData {
   // Step's workspace for the external wrench and the joint efforts of one step: allocated once.
   Eigen::VectorXd wrench_W;
   Eigen::VectorXd joint_efforts;
+  // Set while a step runs with the GIL released: a second thread stepping the same Data is refused.
+  std::atomic<bool> stepping{false};
 };
 
 // A read-only 1-D numpy view of `values`, kept alive by `owner` (the Python object that holds them).

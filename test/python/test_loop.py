@@ -70,3 +70,40 @@ def test_another_thread_runs_python_while_a_step_is_solved():
     print("step lengths (ms):", [round(1e3 * (e - s), 1) for s, e in intervals], "largest gaps:", np.round(fractions, 2))
     assert min(e - s for s, e in intervals) > 0.005
     assert np.median(fractions) < 0.5
+
+
+def test_a_data_being_stepped_in_another_thread_is_refused():
+    model = implicit_sim.load_scene(scene("p1_ngon1000.urdf"))
+    options = implicit_sim.StepperOptions()
+    state, data = implicit_sim.State.initial(model), implicit_sim.Data(model)
+    implicit_sim.step(model, options, state, data)
+    about_to_step, worker_errors = threading.Event(), []
+
+    def worker():
+        about_to_step.set()
+        try:
+            implicit_sim.step(model, options, state, data)  # 70-500 ms
+        except ValueError as error:  # main's call came first (the worker was descheduled): the test retries
+            worker_errors.append(error)
+
+    refusals = []
+    for _ in range(5):
+        about_to_step.clear()
+        thread = threading.Thread(target=worker)
+        thread.start()
+        about_to_step.wait()
+        time.sleep(0.03)
+        for call in (lambda: implicit_sim.step(model, options, implicit_sim.State.initial(model), data),
+                     lambda: implicit_sim.restore_warm_start(model, implicit_sim.save_warm_start(data), data),
+                     lambda: data.contacts):
+            try:
+                call()
+            except ValueError as error:
+                refusals.append(str(error))
+        thread.join()
+        if len(refusals) == 3:
+            break
+        refusals.clear()
+    assert refusals == ["this Data is being stepped in another thread: give each thread a Data of its own"] * 3
+    report = implicit_sim.step(model, options, state, data)  # and it is usable again afterwards
+    assert report.advanced
