@@ -21,6 +21,11 @@ ModelPtr LoadString(const std::string& xml, const std::string& name, const std::
   return std::make_shared<Model>(LoadSceneFromString(xml, name, options));
 }
 
+const Body& BodyAt(const Model& model, int body) {
+  CheckBodyIndex(model, body);
+  return model.bodies[body];
+}
+
 int CheckedPair(const Model& model, int pair) {
   if (pair < 0 || pair >= static_cast<int>(model.pairs.size())) {
     throw py::value_error("pair index must be in [0, " + std::to_string(model.pairs.size()) + "), got " +
@@ -81,17 +86,22 @@ void BindModel(py::module_& m) {
       .def_property_readonly("gravity", [](const Model& model) { return ToArray(model.gravity_W); }, "m/s^2")
       .def("find_body", &Model::FindBody, py::arg("name"), "body index, -1 if absent")
       .def("find_joint", &Model::FindJoint, py::arg("name"), "joint index, -1 if absent")
-      .def("is_fixed", [](const Model& model, int body) { CheckBodyIndex(model, body); return model.bodies[body].is_fixed; },
-           py::arg("body"))
-      .def("velocity_slot", [](const Model& model, int body) { CheckBodyIndex(model, body); return model.velocity_slot[body]; },
+      .def("is_fixed", [](const Model& model, int body) { return BodyAt(model, body).is_fixed; }, py::arg("body"))
+      .def("velocity_slot",
+           [](const Model& model, int body) {
+             CheckBodyIndex(model, body);
+             return model.velocity_slot[body];
+           },
            py::arg("body"), "the body's slot in q (7 per slot) and v (6 per slot); -1 for a fixed body")
-      .def("mass", [](const Model& model, int body) { CheckBodyIndex(model, body); return model.bodies[body].mass; },
-           py::arg("body"), "kg (0 for a fixed body)")
-      .def("inertia", [](const Model& model, int body) { CheckBodyIndex(model, body); return ToArray(model.bodies[body].I_B); },
-           py::arg("body"), "rotational inertia about the centre of mass in the body frame (kg m^2)")
-      .def("shape_type", [](const Model& model, int body) { CheckBodyIndex(model, body); return model.bodies[body].shape.TypeName(); },
+      .def("mass", [](const Model& model, int body) { return BodyAt(model, body).mass; }, py::arg("body"),
+           "kg (0 for a fixed body)")
+      .def("inertia", [](const Model& model, int body) { return ToArray(BodyAt(model, body).I_B); }, py::arg("body"),
+           "rotational inertia about the centre of mass in the body frame (kg m^2)")
+      .def("shape_type", [](const Model& model, int body) { return BodyAt(model, body).shape.TypeName(); },
            py::arg("body"))
-      .def("joint_type", [](const Model& model, int joint) { return JointTypeName(model.joints[CheckJointIndex(model, joint)].type); },
+      .def("joint_type", [](const Model& model, int joint) {
+             return JointTypeName(model.joints[CheckJointIndex(model, joint)].type);
+           },
            py::arg("joint"))
       .def("joint_limits",
            [](const Model& model, int joint) {
@@ -108,10 +118,17 @@ void BindModel(py::module_& m) {
       .def("pair_friction",
            [](const Model& model, int pair) {
              const FrictionParams& f = model.pairs[CheckedPair(model, pair)].friction;
-             return py::dict(py::arg("mu") = f.mu, py::arg("e_t") = f.e_t, py::arg("e_o") = f.e_o, py::arg("e_r") = f.e_r);
+             return py::dict(py::arg("mu") = f.mu, py::arg("e_t") = f.e_t, py::arg("e_o") = f.e_o,
+                             py::arg("e_r") = f.e_r);
            },
            py::arg("pair"), "the pair's friction: mu, e_t, e_o (-) and e_r (m)")
-      .def("pair_index", &Model::PairIndex, py::arg("body1"), py::arg("body2"), "the pair of two bodies, -1 if none")
+      .def("pair_index",
+           [](const Model& model, int body1, int body2) {
+             CheckBodyIndex(model, body1);
+             CheckBodyIndex(model, body2);
+             return model.PairIndex(body1, body2);
+           },
+           py::arg("body1"), py::arg("body2"), "the pair of two bodies (either order), -1 if none")
       .def("__repr__", [](const Model& model) {
         return "<implicit_sim.Model '" + model.scene_name + "': " + std::to_string(model.bodies.size()) + " bodies (" +
                std::to_string(model.num_moving()) + " moving), " + std::to_string(model.joints.size()) + " joints, " +
@@ -125,9 +142,9 @@ void BindModel(py::module_& m) {
         "directory).");
   m.def("surface_mesh", &SurfaceMeshOfBody, py::arg("model"), py::arg("body"), py::arg("resolution") = 24,
         py::arg("plane_half_size") = 1.0,
-        "(vertices (n, 3) in the body frame B in m, triangles (m, 3)) of the body's shape boundary, for drawing: rays on "
-        "a grid of `resolution` latitudes; a half-space is a square of half size plane_half_size (m); a body without a "
-        "shape gives empty arrays.");
+        "(vertices (n, 3) in the body frame B in m, triangles (m, 3)) of the body's shape boundary, for drawing: "
+        "rays on a grid of `resolution` latitudes; a half-space is a square of half size plane_half_size (m); a body "
+        "without a shape gives empty arrays.");
 }
 
 }  // namespace python

@@ -33,7 +33,8 @@ void SetOption(const OptionRow& row, StepperOptions* options, const py::object& 
   std::string error;
   if (row.kind == OptionKind::kChoice) {
     if (!py::isinstance<py::str>(value)) {
-      throw py::value_error(label + " must be " + OptionRangeText(row) + ", got " + py::repr(value).cast<std::string>());
+      throw py::value_error(label + " must be " + OptionRangeText(row) + ", got " +
+                            py::repr(value).cast<std::string>());
     }
     if (!ParseOptionValue(row, value.cast<std::string>(), label, &number, &error)) throw py::value_error(error);
   } else {

@@ -18,7 +18,8 @@ def runner():
             if candidate.is_file():
                 path = str(candidate)
                 break
-    assert path and os.access(path, os.X_OK), "implicit_sim_run not found: set IMPLICIT_SIM_RUNNER or source devel/setup.bash"
+    assert path and os.access(path, os.X_OK), \
+        "implicit_sim_run not found: set IMPLICIT_SIM_RUNNER or source devel/setup.bash"
     return path
 
 

@@ -102,7 +102,8 @@ def test_every_option_of_the_table_is_an_attribute_named_as_the_cpp_field():
     table = implicit_sim.option_table()
     assert len(table) == 23
     for row in table:
-        owner, name = (options.newton, row["field"][7:]) if row["field"].startswith("newton.") else (options, row["field"])
+        field = row["field"]
+        owner, name = (options.newton, field[7:]) if field.startswith("newton.") else (options, field)
         assert getattr(owner, name) == row["default"], row["field"]
         setattr(owner, name, row["default"])
     options.h = 0.005
@@ -150,7 +151,8 @@ def run(model, options, state, data, steps, **kwargs):
 
 
 def same(a, b):
-    return all(ta == tb and np.array_equal(qa, qb) and np.array_equal(va, vb) for (ta, qa, va), (tb, qb, vb) in zip(a, b))
+    return len(a) == len(b) and all(ta == tb and np.array_equal(qa, qb) and np.array_equal(va, vb)
+                                    for (ta, qa, va), (tb, qb, vb) in zip(a, b))
 
 
 @pytest.mark.parametrize("name, steps", [("p3_sphere_on_two_spheres.urdf", 150), ("gripper_lift.urdf", 60)])
@@ -181,7 +183,8 @@ def cube_scene(force=None):
   <implicit_sim gravity="0 0 -9.81"><friction mu="0.5" e_t="1" e_o="1" e_r="0.01"/>
     <body link="cube" locked="rx ry rz"{attribute}/></implicit_sim>
   <link name="world"/>
-  <link name="floor"><collision><geometry><box size="4 4 0.001"/></geometry><implicit type="halfspace"/></collision></link>
+  <link name="floor">
+    <collision><geometry><box size="4 4 0.001"/></geometry><implicit type="halfspace"/></collision></link>
   <joint name="floor_joint" type="fixed"><parent link="world"/><child link="floor"/></joint>
   <link name="cube"><inertial><mass value="1"/><inertia ixx="0.1667" iyy="0.1667" izz="0.1667" ixy="0" ixz="0" iyz="0"/>
     </inertial><collision><geometry><box size="1 1 1"/></geometry></collision></link>

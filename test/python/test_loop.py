@@ -67,7 +67,8 @@ def test_another_thread_runs_python_while_a_step_is_solved():
     for start, end in intervals:
         inside = np.r_[start, ticks[(ticks > start) & (ticks < end)], end]
         fractions.append(np.diff(inside).max() / (end - start))
-    print("step lengths (ms):", [round(1e3 * (e - s), 1) for s, e in intervals], "largest gaps:", np.round(fractions, 2))
+    print("step lengths (ms):", [round(1e3 * (e - s), 1) for s, e in intervals],
+          "largest gaps:", np.round(fractions, 2))
     assert min(e - s for s, e in intervals) > 0.005
     assert np.median(fractions) < 0.5
 
