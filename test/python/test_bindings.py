@@ -245,3 +245,26 @@ def test_wrench_at_point_adds_the_moment_about_the_centre_of_mass():
     assert list(wrench) == [0, 0, 2.0, 0, -1.0, 0]  # (0.5, 0, 0) x (0, 0, 2) = (0, -1, 0) N m
     with pytest.raises(ValueError):
         implicit_sim.wrench_at_point(model, state, model.find_body("floor"), p_WP=[0, 0, 0], f_W=[1, 0, 0])
+
+
+def test_the_model_reads_as_the_scene_says():
+    model = implicit_sim.load_scene(scene("p3_sphere_on_two_spheres.urdf"))
+    assert model.body_names == ["ball", "sphere_a", "sphere_b"] and model.moving_bodies == [0]
+    assert (model.nq, model.nv, model.num_bodies, model.num_moving) == (7, 6, 3, 1)
+    assert model.pair_names == ["ball-sphere_a", "ball-sphere_b"]
+    ball, sphere_b = model.find_body("ball"), model.find_body("sphere_b")
+    assert model.find_body("nothing") == -1 and model.is_fixed(sphere_b) and not model.is_fixed(ball)
+    assert model.velocity_slot(ball) == 0 and model.velocity_slot(sphere_b) == -1
+    assert model.mass(ball) == 1.0 and model.shape_type(ball) == "sphere"
+    assert model.pair_bodies(model.pair_index(sphere_b, ball)) == (ball, sphere_b)
+    assert model.pair_friction(0) == {"mu": 0.2, "e_t": 1.0, "e_o": 1.0, "e_r": 0.3}
+    assert list(model.gravity) == [0.0, 0.0, 0.0]  # P3: a constant force instead of gravity
+    assert np.array_equal(model.inertia(ball), 0.4 * np.eye(3))
+    vertices, triangles = implicit_sim.surface_mesh(model, sphere_b, resolution=8)
+    p_WB, R_WB = implicit_sim.State.initial(model).pose(model, sphere_b)
+    assert np.allclose(np.linalg.norm(vertices, axis=1), 9.0, atol=1e-9)  # sphere_b: r = 9 m
+    assert triangles.shape == (2 * 8 * 16, 3) and triangles.max() == len(vertices) - 1
+    for call in (lambda: model.mass(3), lambda: model.pair_bodies(2), lambda: model.pair_index(-1, 0),
+                 lambda: implicit_sim.surface_mesh(model, 0, resolution=1)):
+        with pytest.raises(ValueError):
+            call()
