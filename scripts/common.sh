@@ -20,7 +20,8 @@ APT_PACKAGES="build-essential cmake pkg-config googletest libgtest-dev catkin li
   libinteractive-markers-dev python3-interactive-markers libroslib-dev
   libassimp-dev libqhull-dev ros-robot-state-publisher python3-tf2-ros
   libtrajectory-msgs-dev ros-trajectory-msgs python3-trajectory-msgs
-  munge slurmctld slurmd slurm-client openssh-server"
+  munge slurmctld slurmd slurm-client openssh-server
+  pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-setuptools python3-catkin-pkg ffmpeg"
 
 install_packages() {
   local missing=""

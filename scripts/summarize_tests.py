@@ -13,7 +13,8 @@ def main(root):
     passed, failed = 0, 0
     for path in files:
         # gtest-*.xml: the core gtests; rosunit-*.xml: the cases of a rostest's gtest node; rostest-*.xml: one case
-        # per rostest (fails when the test node crashed, timed out or reported failures).
+        # per rostest (fails when the test node crashed, timed out or reported failures); pytest-*.xml: the Python
+        # API's tests.
         try:
             tree = ET.parse(path)
         except ET.ParseError as error:
@@ -27,7 +28,8 @@ def main(root):
                 print(f"FAILED {case.get('classname')}.{case.get('name')}: {problems[0].get('message', '')[:300]}")
             elif case.find("skipped") is None:
                 passed += 1
-    expected = ["gtest-test_core.xml", "gtest-test_batch.xml", "rostest-test_ros_sim_node_p3.xml", "rosunit-test_sim_node.xml"]
+    expected = ["gtest-test_core.xml", "gtest-test_batch.xml", "rostest-test_ros_sim_node_p3.xml", "rosunit-test_sim_node.xml",
+                "pytest-python_api.xml"]
     for name in expected:
         if not any(os.path.basename(f) == name for f in files):
             print(f"FAILED missing result file {name} (did the test binary build and run?)")

@@ -3,13 +3,13 @@
 #include <cmath>
 
 #include "implicit_sim/core/base/format.h"
+#include "implicit_sim/core/geometry/surface_mesh.h"
 #include "implicit_sim/core/step/time_stepper.h"
 
 namespace implicit_sim {
 namespace ros_conversions {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 std_msgs::ColorRGBA Color(float r, float g, float b, float a) {
   std_msgs::ColorRGBA c;
@@ -28,40 +28,14 @@ geometry_msgs::Vector3 ToVectorMsg(const Vec3& v) {
   return m;
 }
 
-bool Inside(const ConvexShape& shape, const Vec3& x_S) {
-  for (const Inequality& q : shape.inequalities) {
-    if (q.Value(x_S) > 0.0) return false;
-  }
-  return true;
-}
-
-// Distance from the shape-frame origin to the boundary along u, by bisection (the shape is convex and contains
-// its origin).
-double RayToBoundary(const ConvexShape& shape, const Vec3& u, double max_length) {
-  double lo = 0.0, hi = max_length;
-  for (int i = 0; i < 40; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (Inside(shape, mid * u) ? lo : hi) = mid;
-  }
-  return lo;
-}
-
-// A TRIANGLE_LIST of the boundary, from rays on a latitude-longitude grid of directions.
+// A TRIANGLE_LIST of the boundary (MakeSurfaceMesh: rays on a 32 x 64 latitude-longitude grid), in the shape frame.
 void RayCastMesh(const ConvexShape& shape, visualization_msgs::Marker* marker) {
-  const int n_lat = 32, n_lon = 64;
-  const double max_length = std::isfinite(shape.BoundingRadius()) ? 1.01 * shape.BoundingRadius() : 10.0;
-  auto vertex = [&](int i, int j) {
-    const double theta = kPi * i / n_lat, phi = 2.0 * kPi * j / n_lon;
-    const Vec3 u(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
-    return ToPointMsg(RayToBoundary(shape, u, max_length) * u);
-  };
+  const SurfaceMesh mesh = MakeSurfaceMesh(shape, 32);
   marker->type = visualization_msgs::Marker::TRIANGLE_LIST;
   marker->scale.x = marker->scale.y = marker->scale.z = 1.0;
-  for (int i = 0; i < n_lat; ++i) {
-    for (int j = 0; j < n_lon; ++j) {
-      const auto a = vertex(i, j), b = vertex(i + 1, j), c = vertex(i + 1, j + 1), d = vertex(i, j + 1);
-      marker->points.insert(marker->points.end(), {a, b, c, a, c, d});
-    }
+  marker->points.reserve(3 * mesh.triangles.size());
+  for (const std::array<int, 3>& triangle : mesh.triangles) {
+    for (int vertex : triangle) marker->points.push_back(ToPointMsg(mesh.vertices[vertex]));
   }
 }
 

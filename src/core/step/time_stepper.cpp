@@ -383,10 +383,7 @@ StepReport Step(const Model& model, const StepperOptions& options, State* state,
   if (!data->BelongsTo(model)) {
     throw std::invalid_argument("Data was built from another Model: build it as Data(model) from the Model given to Step");
   }
-  if (state->q.size() != model.nq() || state->v.size() != model.nv()) {
-    throw std::invalid_argument("state size does not match the model: expected q of " + std::to_string(model.nq()) +
-                                " and v of " + std::to_string(model.nv()) + " values");
-  }
+  if (!CheckState(model, *state, &error)) throw std::invalid_argument(error);
   if (external_wrench_W && (external_wrench_W->size() != model.nv() || !external_wrench_W->allFinite())) {
     throw std::invalid_argument("external wrench vector must hold " + std::to_string(model.nv()) +
                                 " finite values (force, torque per moving body)");

@@ -1,6 +1,8 @@
 // The state of a simulation: time, configuration and velocity of the moving bodies. Nothing else.
 #pragma once
 
+#include <string>
+
 #include <Eigen/Core>
 
 #include "implicit_sim/core/model/model.h"
@@ -20,5 +22,14 @@ struct State {
 };
 
 double KineticEnergy(const Model& model, const State& state);  // J
+
+// How far from 1 the norm of a state's quaternion may be (CheckState).
+constexpr double kUnitQuaternionTolerance = 1e-9;
+
+// Whether `state` is one of `model`: q of model.nq() and v of model.nv() values, t, positions and velocities finite,
+// and every quaternion of unit norm within kUnitQuaternionTolerance. When not, sets *error (if not null) to a message
+// naming the first offending value (the body, its entry of q or v, the allowed range) and returns false. Allocates
+// nothing when the state is valid.
+bool CheckState(const Model& model, const State& state, std::string* error);
 
 }  // namespace implicit_sim

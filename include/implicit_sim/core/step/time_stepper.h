@@ -24,8 +24,8 @@ namespace implicit_sim {
 // wrong; the state is never left non-finite. `external_wrench_W`, if given, holds 6 values per moving body slot:
 // force (N) then torque (N m), world frame, at the centre of mass, constant over the step (added to the model's
 // constant applied wrench). data->joint_drives holds the joints' PD drives over the step (joints.h, JointDrive;
-// data->joint_drive_effort receives their efforts). Throws std::invalid_argument for invalid options, a state or
-// wrench vector whose size does not match the model, a non-finite wrench, or a drive CheckJointDrive refuses (the
+// data->joint_drive_effort receives their efforts). Throws std::invalid_argument for invalid options, a state
+// CheckState refuses (size, non-finite value, quaternion not of unit norm), a wrench vector whose size does not match the model, a non-finite wrench, or a drive CheckJointDrive refuses (the
 // message names the joint), and then changes nothing; solver trouble is reported, never thrown.
 StepReport Step(const Model& model, const StepperOptions& options, State* state, Data* data,
                 const Eigen::VectorXd* external_wrench_W = nullptr);
