@@ -61,8 +61,10 @@ class Motion:
 @dataclass
 class View:
     """The camera and the picture. lower/upper: the world box the camera frames (m); None fits it on the moving bodies
-    over the whole run, widened by margin (a fraction of its size) each side. Planes are drawn clipped to plane_box
-    (lower, upper; default the framing box)."""
+    over the whole run, widened by margin (a fraction of its size) each side; the box's picture fills the fraction
+    fill of the image, times zoom. Planes are drawn clipped to plane_box (lower, upper; default the framing box), the
+    ones the camera sees from their free side as a checkerboard of tile-wide squares (m; None: plain). speed: playback
+    speed over real time, shown in the time label when not 1."""
     elev_deg: float = 25.0
     azim_deg: float = -60.0
     width_px: int = 400
@@ -72,7 +74,10 @@ class View:
     margin: float = 0.08
     zoom: float = 1.0
     plane_box: tuple = None
+    tile: float = None
+    fill: float = 0.96
     time_label: bool = True
+    speed: float = 1.0
     ambient: float = 0.35
     dpi: int = 100
 
@@ -156,11 +161,12 @@ def plane_polygon(point, normal, lower, upper):
     d = float(n @ point)
     corners = np.array([[(lower, upper)[(k >> axis) & 1][axis] for axis in range(3)] for k in range(8)])
     side = corners @ n - d
-    points = []
+    tolerance = 1e-9 * max(1.0, float(np.max(np.asarray(upper) - lower)))  # corners this close are on the plane
+    points = [corners[k] for k in range(8) if abs(side[k]) <= tolerance]
     for k in range(8):
         for axis in range(3):
             m = k | (1 << axis)
-            if m != k and (side[k] <= 0) != (side[m] <= 0):
+            if m != k and min(side[k], side[m]) < -tolerance and max(side[k], side[m]) > tolerance:
                 s = side[k] / (side[k] - side[m])
                 points.append(corners[k] + s * (corners[m] - corners[k]))
     if len(points) < 3:
@@ -172,6 +178,36 @@ def plane_polygon(point, normal, lower, upper):
     v = np.cross(n, u)
     angles = np.arctan2((points - centre) @ v, (points - centre) @ u)
     return points[np.argsort(angles)]
+
+
+def clip_polygon(polygon, normal, offset):
+    """The part of a convex polygon (k, 3) where normal . x <= offset (Sutherland-Hodgman), (j, 3); maybe empty."""
+    out = []
+    for a, b in zip(polygon, np.roll(polygon, -1, axis=0)):
+        da, db = normal @ a - offset, normal @ b - offset
+        if da <= 0:
+            out.append(a)
+        if (da < 0 < db) or (db < 0 < da):
+            out.append(a + da / (da - db) * (b - a))
+    return np.array(out).reshape(-1, 3)
+
+
+def checker_tiles(polygon, normal, tile):
+    """The polygon cut into the squares of a checkerboard of side tile (m) laid in its plane (on the plane's own
+    axes): two lists of polygons, the light and the dark squares."""
+    n = normal / np.linalg.norm(normal)
+    u = np.cross(n, [0, 0, 1.0]) if abs(n[2]) < 0.9 else np.array([1.0, 0, 0])
+    u = (u - (u @ n) * n) / np.linalg.norm(u - (u @ n) * n)
+    v = np.cross(n, u)
+    su, sv = polygon @ u, polygon @ v
+    light, dark = [], []
+    for i in range(int(np.floor(su.min() / tile)), int(np.ceil(su.max() / tile))):
+        strip = clip_polygon(clip_polygon(polygon, -u, -i * tile), u, (i + 1) * tile)
+        for j in range(int(np.floor(sv.min() / tile)), int(np.ceil(sv.max() / tile))):
+            square = clip_polygon(clip_polygon(strip, -v, -j * tile), v, (j + 1) * tile) if len(strip) else strip
+            if len(square) >= 3:
+                (light if (i + j) % 2 == 0 else dark).append(square)
+    return light, dark
 
 
 class Renderer:
@@ -192,7 +228,8 @@ class Renderer:
         self.behind = self._add_layer(1)  # planes the camera sees from their free side: they hide nothing
         self.solids = self._add_layer(2)
         self.in_front = self._add_layer(3)  # planes seen from inside the solid: see-through
-        self.label = self.figure.text(0.03, 0.95, "", fontsize=9, va="top", family="monospace")
+        self.label = self.figure.text(0.02, 0.97, "", fontsize=9, va="top", family="monospace",
+                                      bbox=dict(facecolor=BACKGROUND, alpha=0.8, edgecolor="none", pad=1.5))
         self.canvas.draw()
 
     def _make_axes(self):
@@ -201,13 +238,24 @@ class Renderer:
         axes.view_init(elev=self.view.elev_deg, azim=self.view.azim_deg)
         for setter, lo, hi in zip((axes.set_xlim, axes.set_ylim, axes.set_zlim), self.lower, self.upper):
             setter(lo, hi)
-        axes.set_box_aspect(self.upper - self.lower, zoom=self.view.zoom)  # one scale on all three axes
+        axes.set_box_aspect(self.upper - self.lower)  # one scale on all three axes
         axes.set_axis_off()
         axes.computed_zorder = False
+        self.axes = axes
+        corners = np.array([[(self.lower, self.upper)[(k >> i) & 1][i] for i in range(3)] for k in range(8)])
+        self.canvas.draw()  # lays the axes out: the projection is final only after a draw
+        extent = np.ptp(self.project(corners), axis=0)  # the box's picture at zoom 1 (px)
+        zoom = self.view.fill * min(self.view.width_px / extent[0], self.view.height_px / extent[1])
+        axes.set_box_aspect(self.upper - self.lower, zoom=zoom * self.view.zoom)
+        self.canvas.draw()
+        picture = self.project(corners)
+        offset = (picture.min(axis=0) + picture.max(axis=0)) / 2 - [self.view.width_px / 2, self.view.height_px / 2]
+        axes.set_position([-offset[0] / self.view.width_px, offset[1] / self.view.height_px, 1, 1])  # centred
         return axes
 
     def _add_layer(self, zorder):
         layer = Poly3DCollection([], zorder=zorder, linewidths=0.4, antialiaseds=True)
+        layer.set_clip_on(False)  # mplot3d's axes is a square inside the figure: draw over all of it
         self.axes.add_collection3d(layer)
         return layer
 
@@ -226,15 +274,18 @@ class Renderer:
             elif mesh is not None and len(mesh[0]):
                 triangles, normals = mesh
                 normals = normals @ R.T
-                visible = normals @ self.eye > 0  # back faces of a convex body are hidden
-                solid_faces.append((body.vertices @ R.T + p)[triangles[visible]])
+                world = body.vertices @ R.T + p
+                visible = (normals @ self.eye > 0) & self.in_picture(world, triangles)  # back faces are hidden
+                solid_faces.append(world[triangles[visible]])
                 solid_colours.append(self.shade(colour, normals[visible]))
         faces = np.concatenate(solid_faces) if solid_faces else np.zeros((0, 3, 3))
         colours = np.concatenate(solid_colours) if solid_colours else np.zeros((0, 4))
         self._fill(self.solids, faces, colours, colours)
         self._fill(self.behind, planes[0], planes[1], planes[1])
         self._fill(self.in_front, planes[2], planes[3], [(0.3, 0.3, 0.3, 0.6)] * len(planes[2]))
-        self.label.set_text(f"t = {t:.2f} s" if (t is not None and self.view.time_label) else "")
+        speed = f"  ({self.view.speed:g}x)" if self.view.speed != 1 else ""
+        self.label.set_text(f"t = {t:.2f} s{speed}" if t is not None else "")
+        self.label.set_visible(t is not None and self.view.time_label)
         self.canvas.draw()
         return np.asarray(self.canvas.buffer_rgba())[:, :, :3].copy()
 
@@ -246,8 +297,9 @@ class Renderer:
             return
         rgba = self.shade(colour, normal[None, :])[0]
         if normal @ self.eye >= 0:
-            planes[0].append(polygon)
-            planes[1].append(rgba)
+            light, dark = checker_tiles(polygon, normal, self.view.tile) if self.view.tile else ([polygon], [])
+            planes[0].extend(light + dark)
+            planes[1].extend([rgba] * len(light) + [(*(0.9 * rgba[:3]), 1.0)] * len(dark))
         else:
             planes[2].append(polygon)
             planes[3].append((*rgba[:3], 0.12))
@@ -257,6 +309,12 @@ class Renderer:
         layer.set_verts(list(faces))
         layer.set_facecolor(facecolours if len(faces) else "none")
         layer.set_edgecolor(edgecolours if len(faces) else "none")
+
+    def in_picture(self, vertices, triangles):
+        """Per triangle: False when all three corners are beyond the same edge of the picture."""
+        xy = self.project(vertices)[triangles]  # (m, 3, 2) px
+        size = np.array([self.view.width_px, self.view.height_px])
+        return ~(np.all(xy < 0, axis=1).any(axis=1) | np.all(xy > size, axis=1).any(axis=1))
 
     def project(self, points):
         """Image coordinates (n, 2) of world points (n, 3), m: x to the right, y down, from the image's top-left
