@@ -62,7 +62,10 @@ def bodies_of(model, resolution):
     for b, name in enumerate(model.body_names):
         fixed = model.is_fixed(b)
         vertices, triangles = isim.surface_mesh(model, b, resolution=resolution[fixed])
-        colour = None if fixed else animation.MOVING_COLOURS[SHAPE_COLOURS.get(model.shape_type(b), 3)]
+        if fixed:
+            colour = animation.FIXED_COLOURS[sum(map(model.is_fixed, range(b))) % 2]
+        else:
+            colour = animation.MOVING_COLOURS[SHAPE_COLOURS.get(model.shape_type(b), 3)]
         if model.shape_type(b) == "halfspace":  # a square in the plane, counter-clockwise seen from outside
             a, c, d = vertices[triangles[0]]
             normal = np.cross(c - a, d - a)

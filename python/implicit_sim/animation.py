@@ -23,6 +23,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 MOVING_COLOURS = [(0.85, 0.33, 0.10), (0.12, 0.47, 0.71), (0.17, 0.63, 0.17), (0.58, 0.40, 0.74),
                   (0.89, 0.65, 0.10), (0.09, 0.65, 0.65)]
 FIXED_COLOUR = (0.72, 0.72, 0.74)
+FIXED_COLOURS = [FIXED_COLOUR, (0.60, 0.62, 0.66)]  # greys that tell neighbouring fixed bodies apart
 PLANE_COLOUR = (0.88, 0.88, 0.86)
 BACKGROUND = (1.0, 1.0, 1.0)
 
