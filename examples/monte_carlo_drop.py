@@ -72,6 +72,9 @@ def parse_arguments(argv):
     parser.add_argument("--h", type=float, default=0.005, help="time step, s (default 0.005)")
     parser.add_argument("--scheme", choices=("rattle", "paper"), default="paper",
                         help="time-stepping scheme (default paper: see the docstring)")
+    parser.add_argument("--newton-max-iterations", type=int, default=None,
+                        help="the solver's iteration cap (default: the simulator's, 100); a small cap such as 2 shows "
+                             "how non-converged drops are reported and left out")
     parser.add_argument("--rest-energy", type=float, default=1e-5,
                         help="at rest: kinetic energy below this, J (default 1e-5) ...")
     parser.add_argument("--rest-hold", type=float, default=0.2, help="... for this long, s (default 0.2)")
@@ -311,6 +314,8 @@ def main(argv=None):
     options = implicit_sim.StepperOptions()
     options.h = arguments.h
     options.scheme = arguments.scheme
+    if arguments.newton_max_iterations is not None:
+        options.newton.max_iterations = arguments.newton_max_iterations
     start = time.monotonic()
     rows = []
     for index in range(arguments.samples):
