@@ -98,7 +98,7 @@ def simulate_spin_down(mu, h, scheme, max_time):
     options.h = h
     options.scheme = scheme
     state, data = implicit_sim.State.initial(model), implicit_sim.Data(model)
-    w0 = state.v[SPIN_AXIS]
+    w0 = float(state.v[SPIN_AXIS])
     slope, t_stop = closed_form(model, ball, w0)
     times, spins, moments, normal_forces = [state.t], [w0], [math.nan], [math.nan]
     stopped_steps, nonconverged = 0, 0
@@ -107,7 +107,7 @@ def simulate_spin_down(mu, h, scheme, max_time):
         nonconverged += not report.converged
         contacts = data.contacts
         times.append(state.t)
-        spins.append(state.v[SPIN_AXIS])
+        spins.append(float(state.v[SPIN_AXIS]))
         moments.append(float(np.sum(contacts["torsional_moment"])))  # N m, on the ball about the normal
         normal_forces.append(float(np.sum(contacts["normal_force"])))
         stopped_steps = stopped_steps + 1 if abs(spins[-1]) <= 1e-9 * abs(w0) else 0
@@ -120,9 +120,9 @@ def simulate_spin_down(mu, h, scheme, max_time):
 def measure(run, h):
     """The measured slope (least squares over the step ends while it spins), stop time and torsional moment error."""
     spinning = np.abs(run["w_z"]) > 1e-9 * abs(run["w0"])
-    slope_measured = np.polyfit(run["t"][spinning], run["w_z"][spinning], 1)[0]
+    slope_measured = float(np.polyfit(run["t"][spinning], run["w_z"][spinning], 1)[0])
     stopped = np.flatnonzero(~spinning)
-    t_stop_measured = run["t"][stopped[0]] if stopped.size else math.nan
+    t_stop_measured = float(run["t"][stopped[0]]) if stopped.size else math.nan
     # While it spins through a whole step, the moment is the largest allowed: e_r mu N (the index 0 row is t = 0).
     sliding_steps = np.flatnonzero(spinning)[1:]
     largest_moment = run["e_r"] * run["mu"] * run["normal_force"][sliding_steps]
@@ -170,7 +170,7 @@ def write_csv(rows, path):
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
         for row in rows:
-            writer.writerow({k: repr(v) if isinstance(v, float) else v for k, v in row.items()})
+            writer.writerow({k: repr(float(v)) if isinstance(v, float) else v for k, v in row.items()})
 
 
 def plot(rows, runs, slope_tolerance, path):
@@ -228,7 +228,8 @@ def main(argv=None):
     if failures:
         return 1
     worst = max(rows, key=lambda r: r["slope_rel_error"])
-    print(f"OK: every slope within {arguments.slope_tolerance:g} of the closed form (worst {worst['slope_rel_error']:.1e}"
+    print(f"OK: every slope within {arguments.slope_tolerance:g} of the closed form "
+          f"(worst {worst['slope_rel_error']:.1e}"
           f" at mu = {worst['mu']:g}), every stop time within one step after the closed form")
     return 0
 

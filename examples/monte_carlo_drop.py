@@ -28,9 +28,9 @@ Run (after `source /tmp/implicit_sim_ws/devel/setup.bash`, from the repository r
     /usr/bin/python3 examples/monte_carlo_drop.py --half-extents 0.05 0.05 0.05 --samples 300 --out /tmp/cube
 
 Writes into --out (default examples_output/monte_carlo_drop/):
-    drops.csv          one row per drop: its draws, outcome (rest, not_converged, energy_rise, not_at_rest), face, tilt, the error of
-                       the centre's height at rest, time to rest, steps, non-converged steps, Newton iterations,
-                       the largest rise of its mechanical energy (J) above its value at release
+    drops.csv          one row per drop: its draws, outcome (rest, not_converged, energy_rise, not_at_rest), face,
+                       tilt, the error of the centre's height at rest, time to rest, steps, non-converged steps,
+                       Newton iterations, the largest rise of its mechanical energy (J) above its value at release
     summary.json       the parameters, face counts (drops at rest with every step converged), the other outcomes
     faces.png          histogram of the resting faces, and of the time to rest
     part_drop.urdf     the scene that was simulated
@@ -261,7 +261,7 @@ def write_csv(rows, path):
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
         for row in rows:
-            writer.writerow({k: ("" if v is None else repr(v) if isinstance(v, float) else v) for k, v in row.items()})
+            writer.writerow({k: ("" if v is None else repr(float(v)) if isinstance(v, float) else v) for k, v in row.items()})
 
 
 def plot(summary, rows, path):
@@ -298,9 +298,10 @@ def print_summary(summary):
           f"({summary['nonconverged_steps']} of {summary['steps']} steps); drops whose energy rose: "
           f"{summary['energy_rise_drops']}")
     if summary["time_to_rest_s"]:
-        print(f"time to rest: mean {summary['time_to_rest_s']['mean']:.3f} s, max {summary['time_to_rest_s']['max']:.3f} s;"
-              f" at rest: largest tilt {summary['largest_tilt_at_rest_deg']:.2g} deg, largest error of the centre's height"
-              f" {summary['largest_centre_height_error_at_rest_m']:.2g} m; largest rise of mechanical energy"
+        times = summary["time_to_rest_s"]
+        print(f"time to rest: mean {times['mean']:.3f} s, max {times['max']:.3f} s; at rest: largest tilt "
+              f"{summary['largest_tilt_at_rest_deg']:.2g} deg, largest error of the centre's height "
+              f"{summary['largest_centre_height_error_at_rest_m']:.2g} m; largest rise of mechanical energy"
               f" {summary['largest_energy_rise_J']:.2g} J; wall time {summary['wall_time_s']:.1f} s")
 
 

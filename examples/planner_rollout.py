@@ -93,7 +93,8 @@ def parse_arguments(argv):
                         help="target of the box's centre on the table, m (default 1 0.5; the box starts at 0 0)")
     parser.add_argument("--tolerance", type=float, default=0.01,
                         help="reached: the box's centre within this distance of the target, m (default 0.01) ...")
-    parser.add_argument("--rest-speed", type=float, default=1e-3, help="... and its speed below this, m/s (default 1e-3)")
+    parser.add_argument("--rest-speed", type=float, default=1e-3,
+                        help="... and its speed below this, m/s (default 1e-3)")
     parser.add_argument("--decision-period", type=float, default=0.1, help="s between decisions (default 0.1)")
     parser.add_argument("--coast", type=float, default=0.6,
                         help="longest coast after the push in each rollout, s (default 0.6; it ends at rest)")
@@ -198,7 +199,7 @@ class World:
 
 
 def push_wrench(world, push, direction_W):
-    """The wrench (nv,) of `push` with horizontal unit direction direction_W (toward the target), at this step's pose."""
+    """The wrench (nv,) of `push` at this step's pose; direction_W is the horizontal unit direction to the target."""
     if push.force == 0.0:
         return None
     heading = math.radians(push.heading)

@@ -70,6 +70,16 @@ def test_monte_carlo_drop_counts_add_up_and_parts_rest_flat_on_a_face(tmp_path):
     assert summary["nonconverged_steps"] == sum(int(d["nonconverged_steps"]) for d in drops)
 
 
+def test_monte_carlo_drop_leaves_out_drops_with_non_converged_steps(tmp_path):
+    # Two Newton iterations cannot solve a drop's first step (a cold start): every drop is reported, none counted.
+    out, process = run_example("monte_carlo_drop", tmp_path, "--samples", "3", "--newton-max-iterations", "2",
+                               expect=1)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["not_converged_drops"] == 3 and summary["counted"] == 0 and summary["nonconverged_steps"] >= 3
+    assert process.stdout.count("non-converged steps, not counted") == 3
+    assert all(d["outcome"] == "not_converged" for d in read_csv(out / "drops.csv"))
+
+
 def test_planner_rollout_reaches_the_target_and_rejects_pushes_from_the_contacts(tmp_path):
     out, process = run_example("planner_rollout", tmp_path, "--quick")
     assert (out / "path.png").stat().st_size > 0
