@@ -234,6 +234,7 @@ class Renderer:
         self.canvas.draw()
 
     def _make_axes(self):
+        """The 3D axes: orthographic, one scale on x, y, z, the framing box centred and filling view.fill."""
         axes = self.figure.add_axes([0, 0, 1, 1], projection="3d", facecolor=BACKGROUND)
         axes.set_proj_type("ortho")
         axes.view_init(elev=self.view.elev_deg, azim=self.view.azim_deg)
@@ -267,6 +268,7 @@ class Renderer:
         return np.column_stack([rgb, np.ones(len(rgb))])
 
     def render(self, positions, rotations, t=None):
+        """One frame: positions (B, 3) m and rotations (B, 3, 3) of the bodies, t the time label (s) or None."""
         solid_faces, solid_colours, planes = [], [], ([], [], [], [])
         for body, mesh, p, R in zip(self.bodies, self.meshes, positions, rotations):
             colour = body.colour or (FIXED_COLOUR if body.fixed else MOVING_COLOURS[0])
