@@ -50,9 +50,7 @@ void BindState(py::module_& m) {
       .def("copy", [](const PyState& s) { return PyState(s); }, "an independent copy (same Model)")
       .def("assign", [](PyState& s, const PyState& other) {
              CheckSameModel(s.model, *other.model, "the other State");
-             s.state.t = other.state.t;
-             s.state.q = other.state.q;
-             s.state.v = other.state.v;
+             Commit(&s, other.state);
            },
            py::arg("other"), "copies another State of the same Model into this one, in place (views stay valid)")
       .def("pose",
