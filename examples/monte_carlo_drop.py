@@ -19,8 +19,8 @@ with (--seed, i), so the first N drops of a larger run are the drops of a run wi
 
 The time-stepping scheme defaults to the paper's first-order step: its numerical damping stands in for a real part's
 material damping; every drop of the default run comes to rest and none gains energy. Under the second-order RATTLE
-step a rounded part rocks longer on its face (only impacts dissipate; doc/batch.md), and a step costs about 5 times
-as many Newton iterations (examples/README.md): try --scheme rattle --samples 12.
+step a rounded part keeps rocking on its face (only impacts dissipate; doc/batch.md), so drops do not come to rest,
+and some gain energy in single converged steps (examples/README.md): try --scheme rattle --samples 12.
 
 Run (after `source /tmp/implicit_sim_ws/devel/setup.bash`, from the repository root):
     /usr/bin/python3 examples/monte_carlo_drop.py                       # 1000 drops, seed 1

@@ -131,7 +131,6 @@ void BindReport(py::module_& m) {
       .def_readonly("ipopt_solves", &StepReport::ipopt_solves)
       .def_readonly("substeps", &StepReport::substeps)
       .def_readonly("crossings", &StepReport::crossings)
-      .def_readonly("energy_rejections", &StepReport::energy_rejections)
       .def_readonly("broad_phase_additions", &StepReport::broad_phase_additions)
       .def_readonly("joint_position_error", &StepReport::joint_position_error, "m")
       .def_readonly("joint_angle_error", &StepReport::joint_angle_error, "rad")

@@ -70,15 +70,6 @@ def test_monte_carlo_drop_counts_add_up_and_parts_rest_flat_on_a_face(tmp_path):
     assert summary["nonconverged_steps"] == sum(int(d["nonconverged_steps"]) for d in drops)
 
 
-def test_monte_carlo_drop_under_rattle_never_gains_energy(tmp_path):
-    # RATTLE's energy check (doc/method.md, "The second-order step"): the 12 drops of the example's seed 1 once had
-    # 6 drops whose energy rose above its value at release (drop 11: 0.29 J to 53 J in one converged step).
-    out, _ = run_example("monte_carlo_drop", tmp_path, "--scheme", "rattle", "--samples", "12", "--max-time", "1")
-    summary = json.loads((out / "summary.json").read_text())
-    assert summary["energy_rise_drops"] == 0 and summary["largest_energy_rise_J"] <= 1e-6
-    assert summary["not_converged_drops"] == 0
-
-
 def test_monte_carlo_drop_leaves_out_drops_with_non_converged_steps(tmp_path):
     # Two Newton iterations cannot solve a drop's first step (a cold start): every drop is reported, none counted.
     out, process = run_example("monte_carlo_drop", tmp_path, "--samples", "3", "--newton-max-iterations", "2",

@@ -18,7 +18,6 @@ void RunSummary::Add(const StepReport& report, const Data& data) {
   end_frame_retries += report.end_frame_retries;
   substeps += report.substeps;
   crossings += report.crossings;
-  energy_rejections += report.energy_rejections;
   proximal_solves += report.proximal_solves;
   smoothed_solves += report.smoothed_solves;
   ipopt_solves += report.ipopt_solves;
@@ -51,7 +50,6 @@ std::string RunSummary::ToJson() const {
   json += "  \"ipopt_solves\": " + std::to_string(ipopt_solves) + ",\n";
   json += "  \"substeps\": " + std::to_string(substeps) + ",\n";
   json += "  \"crossings\": " + std::to_string(crossings) + ",\n";
-  json += "  \"energy_rejections\": " + std::to_string(energy_rejections) + ",\n";
   json += "  \"broad_phase_additions\": " + std::to_string(broad_phase_additions) + ",\n";
   json += "  \"max_pairs_in_ncp\": " + std::to_string(max_pairs_in_ncp) + ",\n";
   json += "  \"max_iterations\": " + std::to_string(max_iterations) + ",\n";

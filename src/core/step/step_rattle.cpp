@@ -380,28 +380,4 @@ void StepProblem::AddJointRowsVelocityStage(const Eigen::VectorXd& z, Eigen::Vec
   }
 }
 
-StepProblem::EnergyBalance StepProblem::StepEnergyBalance(const Eigen::VectorXd& z_pose,
-                                                          const Eigen::VectorXd& z_velocity) const {
-  EnergyBalance out;
-  for (size_t i = 0; i < slots_.size(); ++i) {
-    const int local = slot_body_[i];
-    const Body& body = model_.bodies[bodies_[local]];
-    const BodyStep& s = start_[local];
-    const Pose X_end = EndPose(bodies_[local], z_pose);
-    const Mat3 I_W1 = X_end.linear() * body.I_B * X_end.linear().transpose();
-    const Vec3 v1 = z_velocity.segment<3>(6 * i), w1 = z_velocity.segment<3>(6 * i + 3);
-    out.kinetic_start += 0.5 * body.mass * s.v0.squaredNorm() + 0.5 * s.w0.dot(s.I_W0 * s.w0);
-    out.kinetic_end += 0.5 * body.mass * v1.squaredNorm() + 0.5 * w1.dot(I_W1 * w1);
-    // R1 = Exp(h w) R0 (paper eq. 2): the rotation vector of the step is h w of z_pose.
-    const double force_work = ExternalForce(i).dot(X_end.translation() - s.p0);
-    const double torque_work = ExternalTorque(i).dot(h_ * z_pose.segment<3>(6 * i + 3));
-    out.known_work += force_work + torque_work;
-    out.work_scale += std::abs(force_work) + std::abs(torque_work);
-  }
-  for (int j : joints_) {
-    if (driven_[j] || model_.joints[j].applied_effort != 0.0) out.has_unaccounted_sources = true;
-  }
-  return out;
-}
-
 }  // namespace implicit_sim

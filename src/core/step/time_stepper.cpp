@@ -187,73 +187,6 @@ bool FinishRattleStep(const StepperOptions& options, bool stage1_converged, Isla
   return converged && velocity.converged && island->z_velocity.allFinite();
 }
 
-// RATTLE's energy check (doc/method.md, "Energy check"): contact, friction, joint constraints, limits, friction and
-// damping never do positive work, so a step whose kinetic energy rose by more than the known work of the constant
-// external forces and torques (gravity, applied wrenches) plus a tolerance is a spurious solution of the two stages.
-// The tolerance covers the scheme's own energy error on smooth motion (a share of the energy that moves in the step:
-// the start's kinetic energy and the work's magnitude) and the solver's (the force scale over h times a speed).
-// Islands with joint drives or constant joint efforts, whose work the balance does not hold, are not checked.
-constexpr double kEnergyRiseShare = 0.05;
-constexpr double kEnergyRiseSpeed = 1e-4;  // m/s
-bool FindEnergyGain(const IslandSolve& island, double h) {
-  const StepProblem::EnergyBalance balance = island.problem.StepEnergyBalance(island.z, island.z_velocity);
-  if (balance.has_unaccounted_sources) return false;
-  const double tolerance = kEnergyRiseShare * (balance.kinetic_start + balance.work_scale) +
-                           kEnergyRiseSpeed * island.problem.force_scale() * h;
-  return !(balance.excess() <= tolerance);
-}
-
-// One solve of the island's step (BeginStep called, RATTLE's start frames set): the retry ladder from island->z (its
-// warm start if island->has_warm_start); a solution in which a body passed through another is no solution of the
-// step (tunnelling), so it is solved again from a cold start (the start-of-step closest points, on the near side);
-// in RATTLE, stage 2 after a converged stage 1, or after the best stage 1 of the shortest sub-step (`last_chance`,
-// which is then accepted). Sets *crossed when the solution still crossed (it is then not converged).
-NcpSummary SolveIslandStep(const IslandStepInputs& in, bool last_chance, IslandSolve* island, bool* crossed,
-                           double* stage1_complementarity) {
-  const Model& model = *in.model;
-  const StepperOptions& options = *in.options;
-  const State& state = *in.state;
-  StepProblem& problem = island->problem;
-  StepReport* report = &island->report;
-  NcpSummary result = SolveWithRetryLadder(model, options, state, island, last_chance, report);
-  *crossed = island->z.allFinite() && FindCrossing(model, state, problem, island->z, nullptr) >= 0;
-  if (*crossed && island->has_warm_start) {
-    island->has_warm_start = false;
-    result = SolveWithRetryLadder(model, options, state, island, last_chance, report);
-    *crossed = island->z.allFinite() && FindCrossing(model, state, problem, island->z, nullptr) >= 0;
-  }
-  if (*crossed) {
-    report->crossings++;
-    result.converged = false;
-  }
-  *stage1_complementarity = 0.0;
-  if (options.scheme == StepperOptions::Scheme::kRattle && island->z.allFinite() && (result.converged || last_chance)) {
-    result.converged = FinishRattleStep(options, result.converged, island, report, stage1_complementarity);
-  }
-  return result;
-}
-
-// A converged RATTLE step that gains energy (FindEnergyGain) is rejected and solved again from `warm_start` with
-// every pair on its end-of-step frame (a start frame can carry the impulse to a lever the body has left), then from
-// a cold start; if every solve gains energy the step is not converged (and split). Each rejection counts in
-// StepReport::energy_rejections.
-NcpSummary RejectEnergyGains(const IslandStepInputs& in, double h, bool last_chance, const Eigen::VectorXd& warm_start,
-                             NcpSummary result, IslandSolve* island, bool* crossed, double* stage1_complementarity) {
-  StepProblem& problem = island->problem;
-  for (int retry = 0; result.converged && FindEnergyGain(*island, h); ++retry) {
-    island->report.energy_rejections++;
-    const bool end_frames = retry == 0 && problem.FallBackToEndFrames() > 0 && island->has_warm_start;
-    if (!end_frames && (retry > 1 || !island->has_warm_start)) {
-      result.converged = false;
-      break;
-    }
-    island->z = warm_start;
-    if (!end_frames) island->has_warm_start = false;
-    result = SolveIslandStep(in, last_chance, island, crossed, stage1_complementarity);
-  }
-  return result;
-}
-
 // Advances the island's bodies in *state by h; when the solve fails, by two halves instead, down to
 // h / 2^kMaxSubstepDepth, where the best finite iterate is accepted and reported as not converged. Returns false if
 // the island could not be advanced.
@@ -274,11 +207,23 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
     problem.SetStartFrames(island->z, island->frame_known);
   }
   const bool last_chance = depth == Data::kMaxSubstepDepth;
-  bool crossed = false;
+  NcpSummary result = SolveWithRetryLadder(model, options, *state, island, last_chance, report);
+  // A solution in which a body passed through another is no solution of the step (tunnelling): solve again from a
+  // cold start (the start-of-step closest points, on the near side), and if it still crosses, split the step.
+  bool crossed = island->z.allFinite() && FindCrossing(model, *state, problem, island->z, nullptr) >= 0;
+  if (crossed && island->has_warm_start) {
+    island->has_warm_start = false;
+    result = SolveWithRetryLadder(model, options, *state, island, last_chance, report);
+    crossed = island->z.allFinite() && FindCrossing(model, *state, problem, island->z, nullptr) >= 0;
+  }
+  if (crossed) {
+    report->crossings++;
+    result.converged = false;
+  }
+  // Stage 2 after a converged stage 1, or after the best stage 1 of the shortest sub-step (which is then accepted).
   double stage1_complementarity = 0.0;
-  NcpSummary result = SolveIslandStep(in, last_chance, island, &crossed, &stage1_complementarity);
-  if (rattle) {
-    result = RejectEnergyGains(in, h, last_chance, backup, result, island, &crossed, &stage1_complementarity);
+  if (rattle && island->z.allFinite() && (result.converged || last_chance)) {
+    result.converged = FinishRattleStep(options, result.converged, island, report, &stage1_complementarity);
   }
   const Eigen::VectorXd& z_velocity = rattle ? island->z_velocity : island->z;
   if (!result.converged && depth < Data::kMaxSubstepDepth) {
@@ -344,7 +289,6 @@ void MergeReport(const StepReport& island, StepReport* step) {
   step->ipopt_solves += island.ipopt_solves;
   step->substeps += island.substeps;
   step->crossings += island.crossings;
-  step->energy_rejections += island.energy_rejections;
   step->iterations += island.iterations;
   step->residual_evaluations += island.residual_evaluations;
   step->residual = std::max(step->residual, island.residual);

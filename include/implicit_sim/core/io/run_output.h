@@ -35,7 +35,6 @@ struct RunSummary {
   int ipopt_solves = 0;                // Ipopt solves (primary solver or ladder rung)
   int substeps = 0;                    // step splits after failed solves
   int crossings = 0;                   // solves rejected because a body passed through another
-  int energy_rejections = 0;           // RATTLE solves rejected because they gained energy
   int broad_phase_additions = 0;       // pairs added by the end-of-step check
   int max_pairs_in_ncp = 0;
   int max_iterations = 0;

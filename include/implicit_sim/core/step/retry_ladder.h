@@ -14,8 +14,6 @@
 // Without a warm start the ladder begins at rung 2. With the Ipopt solver as the primary one it stops after rung 2.
 // When every rung fails the best finite iterate is kept; the stepper then splits the step (time_stepper.h).
 // The RATTLE step's velocity stage has a ladder of its own (SolveVelocityStage), and its failure splits the step too.
-// A RATTLE step that converges but gains energy is rejected and solved again by the stepper (time_stepper.cpp,
-// FindEnergyGain): on end-of-step frames, then cold, then split.
 #pragma once
 
 #include "implicit_sim/core/model/model.h"

@@ -211,21 +211,6 @@ class StepProblem final : public NcpProblem {
 
   double force_scale() const { return force_scale_; }
 
-  // The energy balance of a step of the problem's bodies (BeginStep called): their kinetic energy at the start and at
-  // the end (J; velocities of z_velocity at the end poses of z_pose), and the work of the constant external forces
-  // and torques of ExternalForce / ExternalTorque over the step (J): f . (p1 - p0) + tau . theta, theta the rotation
-  // vector of R1 R0^T. For forces this is the exact work of RATTLE's half impulses (m/2 (v1^2 - v0^2) = h f . v_half
-  // for a free body); for torques it is exact while the axis stays. The work of joint drives and constant joint
-  // efforts is not included: has_unaccounted_sources says whether the problem has any.
-  struct EnergyBalance {
-    double kinetic_start = 0.0, kinetic_end = 0.0;  // J
-    double known_work = 0.0;                        // J
-    double work_scale = 0.0;                        // sum of |f . (p1 - p0)| and |tau . theta| over the bodies (J)
-    bool has_unaccounted_sources = false;
-    double excess() const { return kinetic_end - kinetic_start - known_work; }  // J
-  };
-  EnergyBalance StepEnergyBalance(const Eigen::VectorXd& z_pose, const Eigen::VectorXd& z_velocity) const;
-
  private:
   struct BodyStep {   // per body, for the current step
     Vec3 p0 = Vec3::Zero();

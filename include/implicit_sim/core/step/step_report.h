@@ -29,7 +29,6 @@ struct StepReport {
   int ipopt_solves = 0;         // Ipopt solves (the primary solver, or the ladder rung after the continuation)
   int substeps = 0;             // times a (sub-)step was split into two halves after its solve failed
   int crossings = 0;            // solves rejected because a body passed through another (see FindCrossing) and split
-  int energy_rejections = 0;    // RATTLE solves rejected because they gained energy (FindEnergyGain) and solved again
   int broad_phase_additions = 0;  // pairs left out by the broad phase, found overlapping at the step end and added
   int pairs_in_ncp = 0;         // pairs in the NCP of the (last) solve
   int islands = 0;              // islands of the (last) solve (step/islands.h)
