@@ -8,6 +8,8 @@ export ROS_HOME=$WS/.ros ROS_LOG_DIR=$WS/.ros/log ROS_HOSTNAME=localhost
 
 # munge, slurmctld, slurmd, slurm-client and openssh-server: test_batch_engines starts a one-node Slurm and an sshd of
 # its own (test/batch/local_slurm.sh, local_sshd.sh); the packages' services are not started by the test.
+# pybind11, numpy, setuptools and catkin-pkg: the Python API (doc/python.md); pytest: its tests (test/python); ffmpeg:
+# the README's animations (scripts/make_animations) and their test.
 APT_PACKAGES="build-essential cmake pkg-config googletest libgtest-dev catkin libroscpp-dev libtf2-ros-dev
   libgeometry-msgs-dev ros-geometry-msgs libsensor-msgs-dev ros-sensor-msgs libvisualization-msgs-dev libstd-msgs-dev ros-std-msgs libstd-srvs-dev
   libros-rosgraph-msgs-dev ros-message-generation ros-message-runtime librostest-dev python3-rostest
