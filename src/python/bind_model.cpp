@@ -21,18 +21,7 @@ ModelPtr LoadString(const std::string& xml, const std::string& name, const std::
   return std::make_shared<Model>(LoadSceneFromString(xml, name, options));
 }
 
-const Body& BodyAt(const Model& model, int body) {
-  CheckBodyIndex(model, body);
-  return model.bodies[body];
-}
-
-int CheckedPair(const Model& model, int pair) {
-  if (pair < 0 || pair >= static_cast<int>(model.pairs.size())) {
-    throw py::value_error("pair index must be in [0, " + std::to_string(model.pairs.size()) + "), got " +
-                          std::to_string(pair));
-  }
-  return pair;
-}
+const Body& BodyAt(const Model& model, int body) { return model.bodies[CheckBodyIndex(model, body)]; }
 
 // The boundary of a body's shape in its body frame B: vertices (n, 3) in m and triangles (m, 3).
 py::tuple SurfaceMeshOfBody(const Model& model, int body, int resolution, double plane_half_size) {
@@ -111,13 +100,13 @@ void BindModel(py::module_& m) {
            py::arg("joint"), "(lower, upper) in rad or m, (None, None) when not limited")
       .def("pair_bodies",
            [](const Model& model, int pair) {
-             const ContactPair& p = model.pairs[CheckedPair(model, pair)];
+             const ContactPair& p = model.pairs[CheckIndex(pair, model.pairs.size(), "pair")];
              return py::make_tuple(p.body1, p.body2);
            },
            py::arg("pair"), "(body1, body2): body1 always moves; normals point from body 2 towards body 1")
       .def("pair_friction",
            [](const Model& model, int pair) {
-             const FrictionParams& f = model.pairs[CheckedPair(model, pair)].friction;
+             const FrictionParams& f = model.pairs[CheckIndex(pair, model.pairs.size(), "pair")].friction;
              return py::dict(py::arg("mu") = f.mu, py::arg("e_t") = f.e_t, py::arg("e_o") = f.e_o,
                              py::arg("e_r") = f.e_r);
            },

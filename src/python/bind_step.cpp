@@ -75,8 +75,6 @@ StepReport StepOnce(const Model& model, const StepperOptions& options, PyState* 
     if (!joint_efforts.is_none()) {
       CopyArray(joint_efforts, static_cast<Eigen::Index>(model.joints.size()), "joint_efforts (one per joint)",
                 &data->joint_efforts);
-      std::string error;
-      if (!CheckState(model, state->state, &error)) throw py::value_error(error);
       AddJointEffortWrench(model, state->state, data->joint_efforts, &data->wrench_W);
     }
     wrench_W = &data->wrench_W;

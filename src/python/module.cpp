@@ -49,19 +49,12 @@ void CheckSameModel(const ModelPtr& owner_model, const Model& model, const char*
   }
 }
 
-void CheckBodyIndex(const Model& model, int body) {
-  if (body < 0 || body >= static_cast<int>(model.bodies.size())) {
-    throw py::value_error("body index must be in [0, " + std::to_string(model.bodies.size()) + "), got " +
-                          std::to_string(body));
+int CheckIndex(int index, size_t count, const char* what) {
+  if (index < 0 || index >= static_cast<int>(count)) {
+    throw py::value_error(std::string(what) + " index must be in [0, " + std::to_string(count) + "), got " +
+                          std::to_string(index));
   }
-}
-
-int CheckJointIndex(const Model& model, int joint) {
-  if (joint < 0 || joint >= static_cast<int>(model.joints.size())) {
-    throw py::value_error("joint index must be in [0, " + std::to_string(model.joints.size()) + "), got " +
-                          std::to_string(joint));
-  }
-  return joint;
+  return index;
 }
 
 }  // namespace python

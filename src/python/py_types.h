@@ -48,10 +48,10 @@ py::array_t<double> ToArray(const Mat3& value);
 void CopyArray(const py::handle& array, Eigen::Index size, const std::string& what, Eigen::VectorXd* out);
 // ValueError unless `model` is the very Model `owner_model` (what a State or Data was made from).
 void CheckSameModel(const ModelPtr& owner_model, const Model& model, const char* what);
-// ValueError unless `body` indexes model.bodies.
-void CheckBodyIndex(const Model& model, int body);
-// Returns `joint` when it indexes model.joints; ValueError otherwise.
-int CheckJointIndex(const Model& model, int joint);
+// Returns `index` when it is in [0, count); ValueError naming `what` ("body", "joint", "pair") otherwise.
+int CheckIndex(int index, size_t count, const char* what);
+inline int CheckBodyIndex(const Model& model, int body) { return CheckIndex(body, model.bodies.size(), "body"); }
+inline int CheckJointIndex(const Model& model, int joint) { return CheckIndex(joint, model.joints.size(), "joint"); }
 
 void BindModel(py::module_& m);
 void BindOptions(py::module_& m);
