@@ -67,7 +67,7 @@ BlockPredictor::BlockPredictor() : solver_(0, /*sparse=*/false) {}
 void BlockPredictor::CollectBlock(const StepProblem& problem, const PairBlock& block) {
   index_.clear();
   for (int body : {block.body1, block.body2}) {
-    const int column = problem.body_column(problem.bodies()[body]);
+    const int column = problem.layout().column(body);
     for (int k = 0; column >= 0 && k < 6; ++k) index_.push_back(column + k);
   }
   for (int k = 0; k < block.size(); ++k) index_.push_back(block.offset + k);
@@ -79,7 +79,7 @@ int BlockPredictor::Run(const StepProblem& problem, const NewtonOptions& options
                         Eigen::VectorXd* z) {
   int evaluations = 1;
   problem.Evaluate(*z, NcpEvalMode(), &Phi_, nullptr);
-  const std::vector<PairBlock>& blocks = problem.blocks();
+  const std::vector<PairBlock>& blocks = problem.layout().blocks();
   const double start_residual = Phi_.norm();
   z_saved_ = *z;
   double largest = 0.0;

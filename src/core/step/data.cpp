@@ -4,21 +4,30 @@
 #include <stdexcept>
 
 #include "implicit_sim/core/model/joints.h"
+#include "implicit_sim/core/step/schemes/island_scheme.h"
 
 namespace implicit_sim {
 
-IslandSolve::IslandSolve(const Model& model)
-    : problem(model, /*all_pairs=*/false, /*all_bodies=*/false), dense_solver(0, false), sparse_solver(0, true),
-      velocity_dense_solver(0, false), velocity_sparse_solver(0, true), z_backup(Data::kMaxSubstepDepth + 1) {
-  problem.set_regular_separated_friction(true);  // keeps the Newton matrix regular at separated pairs
+IslandSolve::IslandSolve(const Model& model, const std::vector<JointDrive>& drives)
+    : layout(model, /*all_pairs=*/false, /*all_bodies=*/false),
+      kinematics(layout),
+      drives(drives),
+      z_backup(Data::kMaxSubstepDepth + 1) {}
+
+IslandSolve::~IslandSolve() = default;
+
+IslandScheme& IslandSolve::SchemeFor(StepperOptions::Scheme kind) {
+  if (!scheme || scheme->scheme() != kind) scheme = MakeIslandScheme(kind, layout, kinematics, drives);
+  return *scheme;
 }
 
 Data::Data(const Model& model, PairSelection selection)
     : model_(&model),
       broad_phase(selection == PairSelection::kBroadPhase ||
                   (selection == PairSelection::kAuto && static_cast<int>(model.pairs.size()) > kAllPairsLimit)),
-      problem(model, !broad_phase),
-      z(Eigen::VectorXd::Zero(problem.size())),
+      layout(model, !broad_phase),
+      kinematics(layout),
+      z(Eigen::VectorXd::Zero(layout.size())),
       island_root(model.num_moving()),
       island_of_slot(model.num_moving()),
       broad(MakeBroadPhase(model)),
@@ -26,34 +35,33 @@ Data::Data(const Model& model, PairSelection selection)
       inflation(model.bodies.size(), 0.0),
       driven(model.joints.size(), 0),
       joint_drives(model.joints.size()),
-      contacts(problem.blocks().size()),
+      contacts(layout.blocks().size()),
       joint_limit_effort(model.joints.size(), 0.0),
       joint_drive_effort(model.joints.size(), 0.0) {
-  for (size_t c = 0; c < contacts.size(); ++c) contacts[c].pair = problem.blocks()[c].pair;
-  problem.set_regular_separated_friction(true);
+  for (size_t c = 0; c < contacts.size(); ++c) contacts[c].pair = layout.blocks()[c].pair;
 }
 
 Data::~Data() = default;
 
 void Data::LayOut(const std::vector<int>& pairs_in_ncp, const Eigen::VectorXd* z_old) {
-  problem.SetActivePairs(pairs_in_ncp, z_old, &z_remap, &new_blocks);
-  contacts.resize(problem.blocks().size());
+  layout.SetActivePairs(pairs_in_ncp, z_old, &z_remap, &new_blocks);
+  contacts.resize(layout.blocks().size());
 }
 
 bool Data::LayOutDrives(const State& state) {
   bool changed = false;
   for (size_t j = 0; j < joint_drives.size(); ++j) {
     driven[j] = JointDriveActive(joint_drives[j]) && model_->joints[j].has_coordinate();
-    changed = changed || driven[j] != problem.driven_joints()[j];
+    changed = changed || driven[j] != layout.driven_joints()[j];
   }
   if (!changed) return false;
-  const std::vector<char> was_driven = problem.driven_joints();
-  problem.SetDrivenJoints(driven, &z, &z_remap);
+  const std::vector<char> was_driven = layout.driven_joints();
+  layout.SetDrivenJoints(driven, &z, &z_remap);
   z.swap(z_remap);
-  for (int j : problem.joints()) {
+  for (int j : layout.joints()) {
     if (!driven[j] || was_driven[j]) continue;
     const Joint& joint = model_->joints[j];
-    z[problem.joint_offset(j) + joint.size()] = JointDriveEffortAt(
+    z[layout.joint_offset(j) + joint.size()] = JointDriveEffortAt(
         joint, joint_drives[j], JointPosition(*model_, state, j), JointVelocity(*model_, state, j));
   }
   return true;
@@ -62,19 +70,18 @@ bool Data::LayOutDrives(const State& state) {
 int Data::lm_fallbacks() const {
   int total = 0;
   for (const auto& island : islands) {
-    total += island->dense_solver.lm_fallbacks() + island->sparse_solver.lm_fallbacks() +
-             island->velocity_dense_solver.lm_fallbacks() + island->velocity_sparse_solver.lm_fallbacks();
+    if (island->scheme) total += island->scheme->lm_fallbacks();
   }
   return total;
 }
 
 void SaveWarmStart(const Data& data, WarmStart* out) {
   out->valid = data.has_warm_start;
-  data.problem.ActivePairs(&out->pairs);
+  data.layout.ActivePairs(&out->pairs);
   out->z = data.z;
-  out->tangent_axes = data.problem.tangent_axes();
+  out->tangent_axes = data.layout.tangent_axes();
   out->driven_joints.clear();
-  const std::vector<char>& driven = data.problem.driven_joints();
+  const std::vector<char>& driven = data.layout.driven_joints();
   for (size_t j = 0; j < driven.size(); ++j) {
     if (driven[j]) out->driven_joints.push_back(static_cast<int>(j));
   }
@@ -99,29 +106,29 @@ void RestoreWarmStart(const Model& model, const WarmStart& saved, Data* data) {
     throw std::invalid_argument("warm start does not belong to this model (pairs, tangent axes or driven joints)");
   }
   // The layout of saved.z; kept_driven: the layout of data->z, restored if saved.z does not fit.
-  const std::vector<char> kept_driven = data->problem.driven_joints();
+  const std::vector<char> kept_driven = data->layout.driven_joints();
   std::fill(data->driven.begin(), data->driven.end(), 0);
   for (int j : driven) data->driven[j] = 1;
-  if (data->driven != kept_driven) data->problem.SetDrivenJoints(data->driven, nullptr, &data->z_remap);
+  if (data->driven != kept_driven) data->layout.SetDrivenJoints(data->driven, nullptr, &data->z_remap);
   if (data->broad_phase) {
-    data->problem.ActivePairs(&data->pairs);
+    data->layout.ActivePairs(&data->pairs);
     data->LayOut(saved.pairs, nullptr);
   }
-  if (saved.z.size() != data->problem.size()) {
-    const int expected = data->problem.size();
+  if (saved.z.size() != data->layout.size()) {
+    const int expected = data->layout.size();
     if (data->broad_phase) data->LayOut(data->pairs, nullptr);  // back to the layout of data->z
-    if (data->driven != kept_driven) data->problem.SetDrivenJoints(kept_driven, nullptr, &data->z_remap);
+    if (data->driven != kept_driven) data->layout.SetDrivenJoints(kept_driven, nullptr, &data->z_remap);
     throw std::invalid_argument("warm start does not belong to this model: z has " + std::to_string(saved.z.size()) +
                                 " values, the step problem " + std::to_string(expected));
   }
   data->z = saved.z;
-  data->problem.set_tangent_axes(saved.tangent_axes);
+  data->layout.set_tangent_axes(saved.tangent_axes);
   data->has_warm_start = saved.valid;
 }
 
 void ClearWarmStart(Data* data) {
   if (data->broad_phase) data->LayOut({}, nullptr);
-  data->z.setZero(data->problem.size());
+  data->z.setZero(data->layout.size());
   data->has_warm_start = false;
   data->forced_pairs.clear();
 }

@@ -31,13 +31,12 @@ int IslandOfPair(const Model& model, const Data& data, int pair) {
 
 // Sizes the island's vectors for its problem (after a new layout).
 void SizeWorkspace(IslandSolve* island) {
-  const int n = island->problem.size();
+  const int n = island->layout.size();
   island->z.setZero(n);
   island->z_start.setZero(n);
   island->z_best.setZero(n);
   island->z_center.setZero(n);
   island->z_cold.setZero(n);
-  island->z_velocity.setZero(n);
   island->ncp_error_rows.setZero(n);
   for (Eigen::VectorXd& backup : island->z_backup) backup.setZero(n);
   island->contacts.resize(island->pairs.size());
@@ -47,9 +46,9 @@ void SizeWorkspace(IslandSolve* island) {
 }
 
 // Whether the island's problem has the drive unknowns of the whole model's for the joints it will hold.
-bool SameDrivenJoints(const StepProblem& global, const IslandSolve& island) {
+bool SameDrivenJoints(const StepLayout& global, const IslandSolve& island) {
   for (int j : island.next_joints) {
-    if (global.driven_joints()[j] != island.problem.driven_joints()[j]) return false;
+    if (global.driven_joints()[j] != island.layout.driven_joints()[j]) return false;
   }
   return true;
 }
@@ -60,7 +59,7 @@ void PartitionIslands(const Model& model, Data* data) {
   std::vector<int>& root = data->island_root;
   const int num_slots = model.num_moving();
   for (int k = 0; k < num_slots; ++k) root[k] = k;
-  for (const PairBlock& blk : data->problem.blocks()) {
+  for (const PairBlock& blk : data->layout.blocks()) {
     Join(&root, SlotOf(model, model.pairs[blk.pair].body1), SlotOf(model, model.pairs[blk.pair].body2));
   }
   for (const Joint& joint : model.joints) Join(&root, SlotOf(model, joint.parent), SlotOf(model, joint.child));
@@ -69,7 +68,7 @@ void PartitionIslands(const Model& model, Data* data) {
   std::vector<int>& island_of = data->island_of_slot;
   int count = 0;
   for (int k = 0; k < num_slots; ++k) island_of[k] = root[k] == k ? count++ : island_of[FindRoot(&root, k)];
-  while (static_cast<int>(data->islands.size()) < count) data->islands.push_back(std::make_unique<IslandSolve>(model));
+  while (static_cast<int>(data->islands.size()) < count) data->islands.push_back(std::make_unique<IslandSolve>(model, data->joint_drives));
   for (int i = 0; i < count; ++i) {
     IslandSolve& island = *data->islands[i];
     island.next_slots.clear();
@@ -83,7 +82,7 @@ void PartitionIslands(const Model& model, Data* data) {
     const int k = SlotOf(model, joint.child) >= 0 ? SlotOf(model, joint.child) : SlotOf(model, joint.parent);
     if (k >= 0) data->islands[island_of[k]]->next_joints.push_back(j);
   }
-  const std::vector<PairBlock>& blocks = data->problem.blocks();
+  const std::vector<PairBlock>& blocks = data->layout.blocks();
   for (int c = 0; c < static_cast<int>(blocks.size()); ++c) {
     IslandSolve& island = *data->islands[IslandOfPair(model, *data, blocks[c].pair)];
     island.next_pairs.push_back(blocks[c].pair);
@@ -92,24 +91,24 @@ void PartitionIslands(const Model& model, Data* data) {
   for (int i = 0; i < count; ++i) {
     IslandSolve& island = *data->islands[i];
     if (island.next_slots == island.slots && island.next_joints == island.joints && island.next_pairs == island.pairs &&
-        SameDrivenJoints(data->problem, island)) {
+        SameDrivenJoints(data->layout, island)) {
       continue;
     }
     island.slots = island.next_slots;  // copies (not swaps), so that both keep their capacity
     island.joints = island.next_joints;
     island.pairs = island.next_pairs;
     Eigen::VectorXd unused;
-    island.problem.SetDrivenJoints(data->problem.driven_joints(), nullptr, &unused);
-    island.problem.SetBodies(island.slots, island.joints);
-    island.problem.SetActivePairs(island.pairs, nullptr, &unused, &island.new_blocks);
+    island.layout.SetDrivenJoints(data->layout.driven_joints(), nullptr, &unused);
+    island.layout.SetBodies(island.slots, island.joints);
+    island.layout.SetActivePairs(island.pairs, nullptr, &unused, &island.new_blocks);
     SizeWorkspace(&island);
   }
   data->num_islands = count;
 }
 
 void GatherIsland(const Data& data, IslandSolve* island) {
-  const StepProblem& global = data.problem;
-  StepProblem& local = island->problem;
+  const StepLayout& global = data.layout;
+  StepLayout& local = island->layout;
   for (size_t i = 0; i < island->slots.size(); ++i) {
     island->z.segment<6>(6 * i) = data.z.segment<6>(Model::v_offset(island->slots[i]));
   }
@@ -126,12 +125,11 @@ void GatherIsland(const Data& data, IslandSolve* island) {
   island->frame_known.resize(island->blocks.size());
   for (size_t c = 0; c < island->blocks.size(); ++c) island->frame_known[c] = data.frame_known[island->blocks[c]];
   island->has_warm_start = data.has_warm_start;
-  local.set_joint_drives(&data.joint_drives);
 }
 
 void ScatterIsland(const IslandSolve& island, Data* data) {
-  StepProblem& global = data->problem;
-  const StepProblem& local = island.problem;
+  StepLayout& global = data->layout;
+  const StepLayout& local = island.layout;
   for (size_t i = 0; i < island.slots.size(); ++i) {
     data->z.segment<6>(Model::v_offset(island.slots[i])) = island.z.segment<6>(6 * i);
   }

@@ -12,36 +12,46 @@ namespace {
 // Hessian, and halving the step is cheaper: such islands try Ipopt only as a last chance, in the shortest sub-step.
 constexpr int kIpoptFirstSizeLimit = 600;
 
-// Adds a solve's iterations and residual evaluations to the report.
-void Count(const NcpSummary& summary, StepReport* report) {
-  report->iterations += summary.iterations;
-  report->residual_evaluations += summary.residual_evaluations;
-}
-
-// The primary solver from island->z_start; the solution goes to island->z.
-NcpSummary SolveFromStart(const StepperOptions& options, IslandSolve* island, StepReport* report) {
-  island->z = island->z_start;
-  NcpSummary summary;
-  if (options.solver == StepperOptions::Solver::kIpopt) {
-    report->ipopt_solves++;
-    summary = SolveNcpWithIpopt(island->problem, options.IpoptOptions(), &island->z);
-  } else {
-    summary = island->solver().Solve(island->problem, options.newton, &island->z);
+// One ladder's problem, its Newton solver, its iterate *z, the island's workspace (z_start, z_best, z_center, z_cold)
+// and the report its rungs count into. Every rung reads and writes only these.
+struct Ladder {
+  const StepProblem& problem;
+  SemismoothNewton& solver;
+  Eigen::VectorXd& z;
+  IslandSolve& work;
+  StepReport* report;
+  NcpSummary Solve(const NewtonOptions& newton, double smoothing = 0.0) {
+    const NcpSummary summary = solver.Solve(problem, newton, &z, smoothing);
+    Count(summary);
+    return summary;
   }
-  Count(summary, report);
+  // Adds a solve's iterations and residual evaluations to the report.
+  void Count(const NcpSummary& summary) {
+    report->iterations += summary.iterations;
+    report->residual_evaluations += summary.residual_evaluations;
+  }
+};
+
+// The primary solver from work.z_start; the solution goes to z.
+NcpSummary SolveFromStart(const StepperOptions& options, Ladder* ladder) {
+  ladder->z = ladder->work.z_start;
+  if (options.solver != StepperOptions::Solver::kIpopt) return ladder->Solve(options.newton);
+  ladder->report->ipopt_solves++;
+  const NcpSummary summary = SolveNcpWithIpopt(ladder->problem, options.IpoptOptions(), &ladder->z);
+  ladder->Count(summary);
   return summary;
 }
 
-// The best attempt of the rungs after the cold start: its summary, with its iterate in island->z_best.
+// The best attempt of the rungs after the first: its summary, with its iterate in work.z_best.
 class BestAttempt {
  public:
   explicit BestAttempt(const NcpSummary& summary) : best_(summary) {}
   const NcpSummary& summary() const { return best_; }
-  // Keeps island->z if `summary` (its solve) beats the best so far.
-  void Offer(const NcpSummary& summary, IslandSolve* island) {
+  // Keeps the ladder's z if `summary` (its solve) beats the best so far.
+  void Offer(const NcpSummary& summary, Ladder* ladder) {
     if (summary.residual < best_.residual || !std::isfinite(best_.residual)) {
       best_ = summary;
-      island->z_best = island->z;
+      ladder->work.z_best = ladder->z;
     }
   }
 
@@ -49,71 +59,76 @@ class BestAttempt {
   NcpSummary best_;
 };
 
-// The end of the rungs after the cold start: a Newton solve of the exact problem from island->z (if finite),
-// counted; true if it converged, otherwise its iterate is offered as the best attempt.
-bool PolishOrOffer(const StepperOptions& options, IslandSolve* island, StepReport* report, BestAttempt* best,
-                   NcpSummary* summary) {
-  if (!island->z.allFinite()) return false;
-  *summary = island->solver().Solve(island->problem, options.newton, &island->z);
-  Count(*summary, report);
+// The end of the rungs after the cold start: a Newton solve of the exact problem from z (if finite), counted; true if
+// it converged, otherwise its iterate is offered as the best attempt.
+bool PolishOrOffer(const StepperOptions& options, Ladder* ladder, BestAttempt* best, NcpSummary* summary) {
+  if (!ladder->z.allFinite()) return false;
+  *summary = ladder->Solve(options.newton);
   if (summary->converged) return true;
-  best->Offer(*summary, island);
+  best->Offer(*summary, ladder);
   return false;
+}
+
+// Rung 1b: the start again with projected multipliers (ncp_problem.h): it rescues failed warm starts where Newton
+// alternates between the two branches of a loaded contact's friction (a landing pile, a rolling polygon). Keeps the
+// better of it and *first (with its iterate in work.z_best); true if it converged.
+bool ProjectedRetry(const StepperOptions& projected_options, Ladder* ladder, NcpSummary* first) {
+  ladder->report->projected_solves++;
+  const NcpSummary projected = SolveFromStart(projected_options, ladder);
+  if (projected.residual < first->residual || !std::isfinite(first->residual) || projected.converged) {
+    *first = projected;
+    ladder->work.z_best = ladder->z;
+  }
+  return projected.converged;
 }
 
 // Rung 2b: proximal point. Newton on the problem perturbed by the weight c (z - z_k) on the contact force and friction
 // rows (ncp_problem.h), each round from the last round's end z_k, with c = proximal_weight, / 10, ... down to 1e-6
-// m/s, then on the exact problem. Starts from island->z_start (the better of the warm and cold attempts).
-bool ProximalPoint(const StepperOptions& options, IslandSolve* island, StepReport* report, BestAttempt* best,
-                   NcpSummary* summary) {
-  report->proximal_solves++;
-  island->z = island->z_start;
+// m/s, then on the exact problem. Starts from work.z_start (the better of the warm and cold attempts).
+bool ProximalPoint(const StepperOptions& options, Ladder* ladder, BestAttempt* best, NcpSummary* summary) {
+  ladder->report->proximal_solves++;
+  ladder->z = ladder->work.z_start;
   NewtonOptions round = options.newton;
   round.max_iterations = std::min(options.newton.max_iterations, 30);
-  round.proximal_center = &island->z_center;
-  for (double c = options.proximal_weight; c >= 1e-6 && island->z.allFinite(); c *= 0.1) {
-    island->z_center = island->z;
+  round.proximal_center = &ladder->work.z_center;
+  for (double c = options.proximal_weight; c >= 1e-6 && ladder->z.allFinite(); c *= 0.1) {
+    ladder->work.z_center = ladder->z;
     round.proximal_weight = c;
-    *summary = island->solver().Solve(island->problem, round, &island->z);
-    Count(*summary, report);
+    *summary = ladder->Solve(round);
   }
-  return PolishOrOffer(options, island, report, best, summary);
+  return PolishOrOffer(options, ladder, best, summary);
 }
 
 // Rung 3: Newton on the FB functions smoothed by mu = 1e-2, 1e-3, ..., 1e-8, each from the last, then exactly.
-// Starts from island->z as the cold start left it.
-bool SmoothingContinuation(const StepperOptions& options, IslandSolve* island, StepReport* report, BestAttempt* best,
-                           NcpSummary* summary) {
-  report->smoothed_solves++;
-  for (double mu = 1e-2; mu > 1e-9 && island->z.allFinite(); mu *= 0.1) {
-    *summary = island->solver().Solve(island->problem, options.newton, &island->z, mu);
-    Count(*summary, report);
-  }
-  return PolishOrOffer(options, island, report, best, summary);
+// Starts from z as it is.
+bool SmoothingContinuation(const StepperOptions& options, Ladder* ladder, BestAttempt* best, NcpSummary* summary) {
+  ladder->report->smoothed_solves++;
+  for (double mu = 1e-2; mu > 1e-9 && ladder->z.allFinite(); mu *= 0.1) *summary = ladder->Solve(options.newton, mu);
+  return PolishOrOffer(options, ladder, best, summary);
 }
 
-// Rung 4: Ipopt on the complementarity-penalty NLP from island->z_start, polished by Newton.
-bool IpoptThenNewton(const StepperOptions& options, IslandSolve* island, StepReport* report, BestAttempt* best,
-                     NcpSummary* summary) {
-  report->ipopt_solves++;
-  island->z = island->z_start;
-  const NcpSummary ipopt = SolveNcpWithIpopt(island->problem, options.IpoptOptions(), &island->z);
-  Count(ipopt, report);
-  return PolishOrOffer(options, island, report, best, summary);
+// Rung 4: Ipopt on the complementarity-penalty NLP from work.z_start, polished by Newton.
+bool IpoptThenNewton(const StepperOptions& options, Ladder* ladder, BestAttempt* best, NcpSummary* summary) {
+  ladder->report->ipopt_solves++;
+  ladder->z = ladder->work.z_start;
+  const NcpSummary ipopt = SolveNcpWithIpopt(ladder->problem, options.IpoptOptions(), &ladder->z);
+  ladder->Count(ipopt);
+  return PolishOrOffer(options, ladder, best, summary);
 }
 
 }  // namespace
 
-NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& options, const State& state, IslandSolve* island,
-                                bool last_chance, StepReport* report) {
-  StepProblem& problem = island->problem;
+NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& options, const State& state,
+                                StepProblem& problem, NewtonSolvers* solvers, IslandSolve* island, bool last_chance,
+                                StepReport* report) {
+  Ladder ladder{problem, solvers->For(problem), island->z, *island, report};
   if (!island->has_warm_start) {
-    SeedColdStart(model, state, &problem, &island->z_start);
-    return SolveFromStart(options, island, report);
+    SeedColdStart(model, state, problem, &island->layout, &island->z_start);
+    return SolveFromStart(options, &ladder);
   }
   // Rung 1: the warm start, with the block predictor's sweeps when it starts far off.
   island->z_start = island->z;
-  SeedWarmStart(model, state, &problem, &island->z_start);
+  SeedWarmStart(model, state, problem, &island->layout, &island->z_start);
   if (options.predictor_sweeps > 0) {
     problem.Evaluate(island->z_start, NcpEvalMode(), &island->ncp_error_rows, nullptr);  // a free workspace here
     report->residual_evaluations++;
@@ -122,41 +137,34 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
                                                             &island->z_start);
     }
   }
-  NcpSummary warm = SolveFromStart(options, island, report);
+  NcpSummary warm = SolveFromStart(options, &ladder);
   if (warm.converged) return warm;
-  // Rung 1a (RATTLE stage 1): the warm start again with every pair on its end-of-step frame; a start frame on the
-  // wrong feature (a polygon that tips onto its next face within the step) can leave stage 1 without a solution.
-  if (problem.FallBackToEndFrames() > 0) {
+  // Rung 1a: the problem's fallback formulation (RATTLE stage 1: every pair on its end-of-step frame; a start frame on
+  // the wrong feature, a polygon that tips onto its next face within the step, can leave stage 1 without a solution).
+  if (problem.UseFallbackFrames() > 0) {
     report->end_frame_retries++;
-    warm = SolveFromStart(options, island, report);
+    warm = SolveFromStart(options, &ladder);
     if (warm.converged) return warm;
   }
   island->z_best = island->z;  // the failed warm attempt (or the projected one, if better)
   // Every rung from here on projects the multipliers (with projected_retries): they start where the plain rows failed.
   StepperOptions later_options = options;
   later_options.newton.project_multipliers = options.projected_retries;
-  // Rung 1b: the warm start again with projected multipliers (ncp_problem.h): it rescues failed warm starts where
-  // Newton alternates between the two branches of a loaded contact's friction (a landing pile, a rolling polygon).
-  if (options.solver == StepperOptions::Solver::kNewton && options.projected_retries) {
-    report->projected_solves++;
-    const NcpSummary projected = SolveFromStart(later_options, island, report);
-    if (projected.converged) return projected;
-    if (projected.residual < warm.residual || !std::isfinite(warm.residual)) {
-      warm = projected;
-      island->z_best = island->z;
-    }
+  if (options.solver == StepperOptions::Solver::kNewton && options.projected_retries &&
+      ProjectedRetry(later_options, &ladder, &warm)) {
+    return warm;
   }
   // Rung 2: a cold start, keeping the failed warm attempt and its tangent axes.
   report->cold_restarts++;
-  island->axes_warm_failed = problem.tangent_axes();
-  SeedColdStart(model, state, &problem, &island->z_start);
-  const NcpSummary cold = SolveFromStart(later_options, island, report);
+  island->axes_warm_failed = island->layout.tangent_axes();
+  SeedColdStart(model, state, problem, &island->layout, &island->z_start);
+  const NcpSummary cold = SolveFromStart(later_options, &ladder);
   if (cold.converged || later_options.solver == StepperOptions::Solver::kIpopt) return cold;
   // The better of the two (with its tangent axes) is kept in z_best, and the Ipopt rung starts from it.
   BestAttempt best(cold);
   if (!(cold.residual < warm.residual) && std::isfinite(warm.residual)) {
     best = BestAttempt(warm);
-    problem.set_tangent_axes(island->axes_warm_failed);
+    island->layout.set_tangent_axes(island->axes_warm_failed);
   } else {
     island->z_best = island->z;
   }
@@ -164,50 +172,34 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
   NcpSummary summary;
   if (later_options.proximal_weight > 0.0) {
     island->z_cold = island->z;
-    if (ProximalPoint(later_options, island, report, &best, &summary)) return summary;
+    if (ProximalPoint(later_options, &ladder, &best, &summary)) return summary;
     island->z.swap(island->z_cold);  // the continuation starts where the cold attempt ended, as without the rung
   }
-  if (SmoothingContinuation(later_options, island, report, &best, &summary)) return summary;
-  if ((last_chance || problem.size() <= kIpoptFirstSizeLimit) &&
-      IpoptThenNewton(later_options, island, report, &best, &summary)) {
+  if (SmoothingContinuation(later_options, &ladder, &best, &summary)) return summary;
+  if ((last_chance || problem.size() <= kIpoptFirstSizeLimit) && IpoptThenNewton(later_options, &ladder, &best, &summary)) {
     return summary;
   }
   island->z = island->z_best;
   return best.summary();
 }
 
-NcpSummary SolveVelocityStage(const StepperOptions& options, IslandSolve* island, StepReport* report) {
-  StepProblem& problem = island->problem;
-  island->z_start = island->z_velocity;  // stage 1's initial guess is no longer needed
-  NcpSummary best = island->solver().Solve(problem, options.newton, &island->z_velocity);
-  Count(best, report);
-  if (best.converged) return best;
-  island->z_best = island->z_velocity;
-  NewtonOptions projected = options.newton;
-  projected.project_multipliers = true;
-  report->projected_solves++;
-  island->z_velocity = island->z_start;
-  NcpSummary summary = island->solver().Solve(problem, projected, &island->z_velocity);
-  Count(summary, report);
-  if (summary.converged) return summary;
-  if (summary.residual < best.residual || !std::isfinite(best.residual)) {
-    best = summary;
-    island->z_best = island->z_velocity;
-  }
-  report->smoothed_solves++;
-  island->z_velocity = island->z_start;
-  for (double mu = 1e-2; mu > 1e-9 && island->z_velocity.allFinite(); mu *= 0.1) {
-    summary = island->solver().Solve(problem, projected, &island->z_velocity, mu);
-    Count(summary, report);
-  }
-  if (island->z_velocity.allFinite()) {
-    summary = island->solver().Solve(problem, projected, &island->z_velocity);
-    Count(summary, report);
-    if (summary.converged) return summary;
-    if (summary.residual < best.residual || !std::isfinite(best.residual)) return summary;
-  }
-  island->z_velocity = island->z_best;
-  return best;
+NcpSummary SolveFromGuess(const StepperOptions& options, const StepProblem& problem, NewtonSolvers* solvers,
+                          Eigen::VectorXd* z, IslandSolve* island, StepReport* report) {
+  Ladder ladder{problem, solvers->For(problem), *z, *island, report};
+  StepperOptions newton_options = options;
+  newton_options.solver = StepperOptions::Solver::kNewton;
+  island->z_start = *z;
+  NcpSummary first = SolveFromStart(newton_options, &ladder);
+  if (first.converged) return first;
+  island->z_best = *z;
+  newton_options.newton.project_multipliers = true;
+  if (ProjectedRetry(newton_options, &ladder, &first)) return first;
+  BestAttempt best(first);
+  *z = island->z_start;
+  NcpSummary summary;
+  if (SmoothingContinuation(newton_options, &ladder, &best, &summary)) return summary;
+  *z = island->z_best;
+  return best.summary();
 }
 
 }  // namespace implicit_sim

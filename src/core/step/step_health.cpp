@@ -6,7 +6,7 @@
 
 #include "implicit_sim/core/geometry/distance_oracle.h"
 #include "implicit_sim/core/base/format.h"
-#include "implicit_sim/core/step/step_problem.h"
+#include "implicit_sim/core/step/layout.h"
 #include "implicit_sim/core/geometry/support.h"
 
 namespace implicit_sim {
@@ -96,16 +96,17 @@ double UpperSupport(const Body& body, const Pose& X_WB, const Vec3& u_W) {
 
 }  // namespace
 
-int FindCrossing(const Model& model, const State& start, const StepProblem& problem, const Eigen::VectorXd& z,
+int FindCrossing(const Model& model, const State& start, const StepKinematics& kinematics, const Eigen::VectorXd& z,
                  std::string* detail) {
-  for (size_t c = 0; c < problem.blocks().size(); ++c) {
-    const PairBlock& blk = problem.blocks()[c];
+  const std::vector<PairBlock>& blocks = kinematics.layout().blocks();
+  for (size_t c = 0; c < blocks.size(); ++c) {
+    const PairBlock& blk = blocks[c];
     const ContactPair& pair = model.pairs[blk.pair];
     const Vec3 n_W = z.segment<3>(blk.offset + pair_index::kN).normalized();
     const Vec3 p_WA2 = z.segment<3>(blk.offset + pair_index::kA2);
     if (!n_W.allFinite() || !p_WA2.allFinite()) continue;  // a non-finite solution is rejected elsewhere
     // The plane in body 2's frame at the end of the step, then in the world at the start.
-    const Pose X_BW_end = problem.EndPose(pair.body2, z).inverse();
+    const Pose X_BW_end = kinematics.EndPose(pair.body2, z).inverse();
     const Pose X_WB2_start = start.X_WB(model, pair.body2);
     const Vec3 n0_W = X_WB2_start.linear() * (X_BW_end.linear() * n_W);
     const Vec3 p0_W = X_WB2_start * (X_BW_end * p_WA2);

@@ -1,10 +1,11 @@
 // The step as a pipeline (paper Sections III-IV):
 //   1. check the inputs, and on a cold step that no two bodies overlap (step_health.h);
-//   2. start-of-step kinematics: poses, velocities and world inertia at t (StepProblem::BeginStep);
+//   2. start-of-step kinematics: poses, velocities and world inertia at t (StepKinematics::BeginStep);
 //   3. candidate pairs: all of them, or the broad phase over bounding spheres grown by the motion within the step;
-//   4. islands: the moving bodies joined by those pairs or by joints (islands.h), each one step NCP of its own (paper
-//      eq. 10-11 with the kinematic map eq. 2 and the closest-point conditions eq. 19-22), solved on a thread pool
-//      through its retry ladder (retry_ladder.h); a failed island solve splits the island's step into halves, down to
+//   4. islands: the moving bodies joined by those pairs or by joints (islands.h), each stepped on a thread pool by its
+//      scheme (schemes/island_scheme.h: the paper's step, one NCP of paper eq. 10-11 with the kinematic map eq. 2 and
+//      the closest-point conditions eq. 19-22; or RATTLE's two stages, one NCP each), every NCP through a retry ladder
+//      (retry_ladder.h); a failed island solve splits the island's step into halves, down to
 //      h / 2^Data::kMaxSubstepDepth;
 //   5. with the broad phase, pairs found overlapping at the step end are added and the step solved again;
 //   6. the end-of-step state (paper eq. 2), contact results, health check of the velocities (step_health.h).
@@ -23,6 +24,7 @@
 #include "implicit_sim/core/step/islands.h"
 #include "implicit_sim/core/step/retry_ladder.h"
 #include "implicit_sim/core/step/seeding.h"
+#include "implicit_sim/core/step/schemes/island_scheme.h"
 #include "implicit_sim/core/step/step_health.h"
 
 namespace implicit_sim {
@@ -31,11 +33,11 @@ namespace {
 // The state of the island's bodies at the end of the step: the poses of paper eq. 2 from the velocities of z_pose,
 // the velocities of z_velocity (the same solution in the paper's step; stage 1 and stage 2 in the RATTLE step).
 // Quaternion signs follow the previous ones, so q is continuous in time. (state->t is Step's.)
-void WriteState(const Model& model, const StepProblem& problem, const Eigen::VectorXd& z_pose,
+void WriteState(const Model& model, const StepKinematics& kinematics, const Eigen::VectorXd& z_pose,
                 const Eigen::VectorXd& z_velocity, State* state) {
-  const std::vector<int>& slots = problem.slots();
+  const std::vector<int>& slots = kinematics.layout().slots();
   for (size_t i = 0; i < slots.size(); ++i) {
-    const Pose X = problem.EndPose(model.moving_bodies[slots[i]], z_pose);
+    const Pose X = kinematics.EndPose(model.moving_bodies[slots[i]], z_pose);
     Eigen::Quaterniond quat(X.linear());
     const int iq = Model::q_offset(slots[i]), iv = Model::v_offset(slots[i]);
     const Eigen::Vector4d old = state->q.segment<4>(iq + 3);
@@ -46,17 +48,17 @@ void WriteState(const Model& model, const StepProblem& problem, const Eigen::Vec
   }
 }
 
-// Lays the problem out for `pairs`, carrying z over; the blocks of new pairs are seeded from `state` like a cold start.
+// Lays z out for `pairs`, carrying it over; the blocks of new pairs are seeded from `state` like a cold start.
 void SetPairs(const Model& model, const State& state, const std::vector<int>& pairs, Data* data) {
-  StepProblem& problem = data->problem;
+  StepLayout& layout = data->layout;
   data->LayOut(pairs, &data->z);
   data->z.swap(data->z_remap);
-  data->frame_known.assign(problem.blocks().size(), 1);
+  data->frame_known.assign(layout.blocks().size(), 1);
   for (int c : data->new_blocks) data->frame_known[c] = 0;
   for (int c : data->new_blocks) {
-    SeedPair(model, state, c, problem, &data->z, /*use_oracle=*/false);
-    problem.ResetTangentAxis(c, data->z);
-    problem.SeedFriction(c, &data->z);
+    SeedPair(model, state, c, layout, data->kinematics.force_scale(), &data->z, /*use_oracle=*/false);
+    layout.ResetTangentAxis(c, data->z);
+    SeedFriction(layout, data->kinematics, c, &data->z);
   }
 }
 
@@ -118,7 +120,7 @@ void SelectPairs(const Model& model, const StepperOptions& options, double h, co
   data->merged.clear();
   std::set_union(data->candidates.begin(), data->candidates.end(), data->forced_pairs.begin(),
                  data->forced_pairs.end(), std::back_inserter(data->merged));
-  data->problem.ActivePairs(&data->pairs);
+  data->layout.ActivePairs(&data->pairs);
   if (data->merged != data->pairs) SetPairs(model, state, data->merged, data);
 }
 
@@ -131,7 +133,7 @@ int CheckLeftOutPairs(const Model& model, const State& end, Data* data) {
     data->inflation[b] = 0.0;
   }
   data->broad.FindPairs(data->X_WB, data->inflation, &data->candidates);
-  data->problem.ActivePairs(&data->pairs);
+  data->layout.ActivePairs(&data->pairs);
   int missing = 0;
   for (int pair : data->candidates) {
     if (std::binary_search(data->pairs.begin(), data->pairs.end(), pair)) continue;
@@ -148,8 +150,8 @@ int CheckLeftOutPairs(const Model& model, const State& end, Data* data) {
 }
 
 // Whether the velocities of an island's solution z exceed options.max_speed or max_angular_speed (see FindDivergence).
-bool ExceedsSpeedLimits(const StepperOptions& options, const StepProblem& problem, const Eigen::VectorXd& z) {
-  for (size_t i = 0; i < problem.slots().size(); ++i) {
+bool ExceedsSpeedLimits(const StepperOptions& options, const StepLayout& layout, const Eigen::VectorXd& z) {
+  for (size_t i = 0; i < layout.slots().size(); ++i) {
     if (z.segment<3>(6 * i).norm() > options.max_speed || z.segment<3>(6 * i + 3).norm() > options.max_angular_speed) {
       return true;
     }
@@ -165,67 +167,46 @@ struct IslandStepInputs {
   State* state;  // each island reads and writes only its own bodies' slots
 };
 
-// The rest of a RATTLE step after stage 1 left its solution in island->z: the pairs whose active inequalities changed
-// fall back to the end frame and stage 1 is solved again (if it had converged); then stage 2 from stage 1 repeated.
-// Returns whether both converged, and stage 1's complementarity error in *stage1_complementarity; the problem is left
-// in stage 1.
-bool FinishRattleStep(const StepperOptions& options, bool stage1_converged, IslandSolve* island, StepReport* report,
-                      double* stage1_complementarity) {
-  StepProblem& problem = island->problem;
-  bool converged = stage1_converged;
-  if (converged && problem.FallBackWhereActiveSetsChanged(island->z) > 0) {
-    const NcpSummary again = island->solver().Solve(problem, options.newton, &island->z);
-    report->iterations += again.iterations;
-    report->residual_evaluations += again.residual_evaluations;
-    converged = again.converged;
-  }
-  *stage1_complementarity = ComputeNcpError(problem, island->z, &island->ncp_error_rows).complementarity;
-  problem.BeginVelocityStage(island->z, island->ncp_error_rows, &island->z_velocity);
-  const NcpSummary velocity = SolveVelocityStage(options, island, report);
-  problem.set_stage(StepStage::kPosition);
-  report->residual = std::max(report->residual, velocity.residual);
-  return converged && velocity.converged && island->z_velocity.allFinite();
-}
-
-// Advances the island's bodies in *state by h; when the solve fails, by two halves instead, down to
-// h / 2^kMaxSubstepDepth, where the best finite iterate is accepted and reported as not converged. Returns false if
-// the island could not be advanced.
+// Advances the island's bodies in *state by h with its scheme (schemes/island_scheme.h); when the solve fails, by two
+// halves instead, down to h / 2^kMaxSubstepDepth, where the best finite iterate is accepted and reported as not
+// converged. Returns false if the island could not be advanced.
 bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve* island) {
   const Model& model = *in.model;
   const StepperOptions& options = *in.options;
   State* state = in.state;
-  StepProblem& problem = island->problem;
+  IslandScheme& scheme = island->SchemeFor(options.scheme);
   StepReport* report = &island->report;
   Eigen::VectorXd& backup = island->z_backup[depth];
   backup = island->z;
   const bool had_warm_start = island->has_warm_start;
-  const bool rattle = options.scheme == StepperOptions::Scheme::kRattle;
-  problem.BeginStep(*state, h, in.wrench);
-  problem.set_stage(rattle ? StepStage::kPosition : StepStage::kWhole);
-  if (rattle) {  // start frames from the warm start: the previous step's closest points, at this step's start
-    if (!island->has_warm_start) std::fill(island->frame_known.begin(), island->frame_known.end(), 0);
-    problem.SetStartFrames(island->z, island->frame_known);
-  }
+  island->kinematics.BeginStep(*state, h, in.wrench);
+  scheme.BeginStep(island);
+  StepProblem& problem = scheme.pose_problem();
   const bool last_chance = depth == Data::kMaxSubstepDepth;
-  NcpSummary result = SolveWithRetryLadder(model, options, *state, island, last_chance, report);
+  NcpSummary result =
+      SolveWithRetryLadder(model, options, *state, problem, &scheme.pose_solvers(), island, last_chance, report);
   // A solution in which a body passed through another is no solution of the step (tunnelling): solve again from a
   // cold start (the start-of-step closest points, on the near side), and if it still crosses, split the step.
-  bool crossed = island->z.allFinite() && FindCrossing(model, *state, problem, island->z, nullptr) >= 0;
+  const auto crosses = [&]() {
+    return island->z.allFinite() && FindCrossing(model, *state, island->kinematics, island->z, nullptr) >= 0;
+  };
+  bool crossed = crosses();
   if (crossed && island->has_warm_start) {
     island->has_warm_start = false;
-    result = SolveWithRetryLadder(model, options, *state, island, last_chance, report);
-    crossed = island->z.allFinite() && FindCrossing(model, *state, problem, island->z, nullptr) >= 0;
+    result =
+        SolveWithRetryLadder(model, options, *state, problem, &scheme.pose_solvers(), island, last_chance, report);
+    crossed = crosses();
   }
   if (crossed) {
     report->crossings++;
     result.converged = false;
   }
-  // Stage 2 after a converged stage 1, or after the best stage 1 of the shortest sub-step (which is then accepted).
-  double stage1_complementarity = 0.0;
-  if (rattle && island->z.allFinite() && (result.converged || last_chance)) {
-    result.converged = FinishRattleStep(options, result.converged, island, report, &stage1_complementarity);
+  // The rest of the step after a converged pose solve, or after the best one of the shortest sub-step (which is then
+  // accepted).
+  if (island->z.allFinite() && (result.converged || last_chance)) {
+    result.converged = scheme.FinishStep(options, result.converged, island, report);
   }
-  const Eigen::VectorXd& z_velocity = rattle ? island->z_velocity : island->z;
+  const Eigen::VectorXd& z_velocity = scheme.velocity_solution(*island);
   if (!result.converged && depth < Data::kMaxSubstepDepth) {
     island->z = backup;
     island->has_warm_start = had_warm_start && !crossed;
@@ -239,31 +220,23 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
   }
   // Even the shortest sub-step crossed: refuse the step rather than let the body through (unless its velocities are
   // beyond the health limits: Step then refuses it as diverged, the more telling fault).
-  if (crossed && !ExceedsSpeedLimits(options, problem, z_velocity)) {
+  if (crossed && !ExceedsSpeedLimits(options, island->layout, z_velocity)) {
     island->has_warm_start = false;
     report->converged = false;
     report->fault = StepFault::kCrossing;
-    FindCrossing(model, *state, problem, island->z, &report->fault_detail);
+    FindCrossing(model, *state, island->kinematics, island->z, &report->fault_detail);
     return false;
   }
   report->converged = report->converged && result.converged;
   report->residual = std::max(report->residual, result.residual);
-  if (rattle) {  // the contact results of the step: stage 1's closest points, the total forces of stage 2
-    problem.set_stage(StepStage::kVelocity);
-    const NcpError velocity_error = ComputeNcpError(problem, z_velocity, &island->ncp_error_rows);
-    report->complementarity_error =
-        std::max({report->complementarity_error, stage1_complementarity, velocity_error.complementarity});
-  } else {
-    const NcpError error = ComputeNcpError(problem, island->z, &island->ncp_error_rows);
-    report->complementarity_error = std::max(report->complementarity_error, error.complementarity);
-  }
-  problem.Contacts(z_velocity, &island->contacts);
+  report->complementarity_error = std::max(report->complementarity_error, scheme.ComplementarityError(island));
+  // The contact results of the step: the closest points of the pose solution, the forces of the velocity solution.
+  scheme.velocity_problem().Contacts(z_velocity, &island->contacts);
   for (size_t i = 0; i < island->joints.size(); ++i) {
-    island->joint_limit_effort[i] = problem.JointLimitEffort(z_velocity, island->joints[i]);
-    island->joint_drive_effort[i] = problem.JointDriveEffort(z_velocity, island->joints[i]);
+    island->joint_limit_effort[i] = island->layout.JointLimitEffort(z_velocity, island->joints[i]);
+    island->joint_drive_effort[i] = island->layout.JointDriveEffort(z_velocity, island->joints[i]);
   }
-  problem.set_stage(rattle ? StepStage::kPosition : StepStage::kWhole);
-  WriteState(model, problem, island->z, z_velocity, state);
+  WriteState(model, island->kinematics, island->z, z_velocity, state);
   island->has_warm_start = true;
   std::fill(island->frame_known.begin(), island->frame_known.end(), 1);  // z is a solution at the new start
   return true;
@@ -318,7 +291,7 @@ bool SolveIslands(const Model& model, const StepperOptions& options, const Eigen
   }
   bool advanced = true;
   report->islands = data->num_islands;
-  data->contacts.resize(data->problem.blocks().size());  // one per pair in the NCP, whatever a caller left in it
+  data->contacts.resize(data->layout.blocks().size());  // one per pair in the NCP, whatever a caller left in it
   for (int i = 0; i < data->num_islands; ++i) {
     const IslandSolve& island = *data->islands[i];
     MergeReport(island.report, report);
@@ -340,13 +313,13 @@ bool Advance(const Model& model, const StepperOptions& options, const Eigen::Vec
   for (int round = 1;; ++round) {
     // The pairs whose closest points in z are at the step's start (RATTLE's start frames): the previous step's, not
     // a new pair's (SetPairs) nor those a repeated round carries from the end of the step.
-    data->frame_known.assign(data->problem.blocks().size(), round == 1 ? 1 : 0);
+    data->frame_known.assign(data->layout.blocks().size(), round == 1 ? 1 : 0);
     if (data->broad_phase) {
-      data->problem.BeginStep(*state, options.h, wrench);  // for the seeds of new pairs
+      data->kinematics.BeginStep(*state, options.h, wrench);  // for the seeds of new pairs
       SelectPairs(model, options, options.h, *state, data);
       if (round > 1) std::fill(data->frame_known.begin(), data->frame_known.end(), 0);
     }
-    report->pairs_in_ncp = static_cast<int>(data->problem.blocks().size());
+    report->pairs_in_ncp = static_cast<int>(data->layout.blocks().size());
     if (!SolveIslands(model, options, wrench, state, data, report)) return false;
     if (!data->broad_phase) return true;
     const int missing = CheckLeftOutPairs(model, *state, data);
@@ -399,7 +372,6 @@ StepReport Step(const Model& model, const StepperOptions& options, State* state,
     return report;
   }
   data->LayOutDrives(*state);
-  data->problem.set_joint_drives(&data->joint_drives);
   data->state_backup = *state;
   const double t_end = state->t + options.h;
   report.advanced = Advance(model, options, external_wrench_W, state, data, &report);

@@ -87,7 +87,7 @@ TEST(BroadPhase, SparseSolveWithTheBroadPhaseFollowsTheDenseAllPairsSolve) {
     max_difference = std::max(max_difference, (a.v - b.v).cwiseAbs().maxCoeff());
   }
   EXPECT_LT(max_difference, 1e-8);
-  EXPECT_LT(sparse.problem.blocks().size(), 2u);  // the ball has left the spheres: their pairs left the NCP
+  EXPECT_LT(sparse.layout.blocks().size(), 2u);  // the ball has left the spheres: their pairs left the NCP
 }
 
 // Independent of the solver and of support.h: sphere-sphere and sphere-wall distances from the centres alone.

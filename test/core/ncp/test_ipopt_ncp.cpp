@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include "implicit_sim/core/io/pile_scene.h"
+#include "implicit_sim/core/step/problems/paper_step.h"
+#include "implicit_sim/core/step/seeding.h"
 #include "scenario_runner.h"
 
 namespace implicit_sim {
@@ -17,13 +19,13 @@ void ExpectSolversAgree(const Model& model, double h, int steps) {
   State state = State::Initial(model);
   for (int i = 0; i < steps; ++i) ASSERT_TRUE(Step(model, options, &state, &data).converged);
   Eigen::VectorXd guess = data.z;
-  data.problem.BeginStep(state, h, nullptr);
-  data.problem.UpdateTangentAxes(&guess);
-  data.problem.PredictClosestPoints(&guess);
+  data.kinematics.BeginStep(state, h, nullptr);
+  const PaperStepProblem problem(data.layout, data.kinematics, data.joint_drives, /*regular_separated_friction=*/true);
+  SeedWarmStart(model, state, problem, &data.layout, &guess);
   Eigen::VectorXd newton = guess, ipopt = guess;
-  SemismoothNewton solver(data.problem.size(), /*sparse=*/data.broad_phase);
-  ASSERT_TRUE(solver.Solve(data.problem, options.newton, &newton).converged);
-  const NcpSummary r = SolveNcpWithIpopt(data.problem, IpoptNcpOptions(), &ipopt);
+  SemismoothNewton solver(problem.size(), /*sparse=*/data.broad_phase);
+  ASSERT_TRUE(solver.Solve(problem, options.newton, &newton).converged);
+  const NcpSummary r = SolveNcpWithIpopt(problem, IpoptNcpOptions(), &ipopt);
   EXPECT_TRUE(r.termination == NcpTermination::kConverged || r.termination == NcpTermination::kInaccurate)
       << r.BriefReport();  // Ipopt reported a solution
   EXPECT_LT(r.equation_residual, 1e-6);
@@ -31,8 +33,9 @@ void ExpectSolversAgree(const Model& model, double h, int steps) {
   const int nv = model.nv();
   EXPECT_LT((ipopt.head(nv) - newton.head(nv)).cwiseAbs().maxCoeff(), 1e-5)
       << "velocities\nNewton " << newton.head(nv).transpose() << "\nIpopt  " << ipopt.head(nv).transpose();
-  for (const PairBlock& blk : data.problem.blocks()) {  // the normal forces
-    EXPECT_NEAR(ipopt[blk.ln()], newton[blk.ln()], 1e-4 * std::max(1.0, std::abs(newton[blk.ln()])));
+  for (const PairBlock& blk : data.layout.blocks()) {  // the normal forces
+    const double newton_force = newton[blk.normal_force()];
+    EXPECT_NEAR(ipopt[blk.normal_force()], newton_force, 1e-4 * std::max(1.0, std::abs(newton_force)));
   }
 }
 

@@ -132,7 +132,7 @@ TEST(Allocation, AWarmSparseStepWithAnUnchangedPairSetAllocatesNothing) {
   }
   EXPECT_EQ(g_allocations.load() - before, 0);
   EXPECT_GE(iterations, 1000);
-  EXPECT_GE(data.problem.blocks().size(), 10u);  // every sphere on the floor, in the NCP
+  EXPECT_GE(data.layout.blocks().size(), 10u);  // every sphere on the floor, in the NCP
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include "implicit_sim/core/model/urdf_loader.h"
 #include "implicit_sim/core/step/seeding.h"
 #include "implicit_sim/core/step/time_stepper.h"
+#include "step/step_problems_fixture.h"
 #include "test_models.h"
 
 namespace implicit_sim {
@@ -15,12 +16,13 @@ namespace {
 
 TEST(BlockPredictor, LowersTheResidualOfAColdStart) {
   const Model model = test_models::SphereOnTwoSpheres();
-  StepProblem problem(model);
+  testing_support::StepProblems problems(model);
+  const StepProblem& problem = problems.paper;
   State state = State::Initial(model);
   state.v[2] = -3.0;  // falling onto both spheres: the cold start's contacts are far from their forces
-  problem.BeginStep(state, 0.01, nullptr);
+  problems.kinematics.BeginStep(state, 0.01, nullptr);
   Eigen::VectorXd z(problem.size()), Phi;
-  SeedColdStart(model, state, &problem, &z);
+  SeedColdStart(model, state, problem, &problems.layout, &z);
   problem.Evaluate(z, NcpEvalMode(), &Phi, nullptr);
   const double before = Phi.norm();
   BlockPredictor predictor;

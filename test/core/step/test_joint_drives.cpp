@@ -359,7 +359,7 @@ TEST(JointDrives, DrivesTurnOnAndOffBetweenStepsWithTheWarmStartCarriedOver) {
                    (selection == Data::PairSelection::kBroadPhase ? ", broad phase" : ", all pairs"));
       const StepperOptions options = Options(scheme, 0.002);
       Data data(model, selection);
-      const int undriven_base = data.problem.pair_base();
+      const int undriven_base = data.layout.pair_base();
       State state = State::Initial(model);
       int cold_restarts = 0, toggle_iterations = 0, toggles = 0;
       double lift_speed = 0.0;
@@ -376,8 +376,8 @@ TEST(JointDrives, DrivesTurnOnAndOffBetweenStepsWithTheWarmStartCarriedOver) {
           toggle_iterations = std::max(toggle_iterations, report.iterations);
           ++toggles;
         }
-        EXPECT_EQ(data.problem.pair_base(), undriven_base + 2 * fingers + lifting) << "step " << i;
-        EXPECT_EQ(data.z.size(), data.problem.size());
+        EXPECT_EQ(data.layout.pair_base(), undriven_base + 2 * fingers + lifting) << "step " << i;
+        EXPECT_EQ(data.z.size(), data.layout.size());
         if (!fingers) {
           EXPECT_EQ(data.joint_drive_effort[left], 0.0);
         }
@@ -429,16 +429,16 @@ TEST(JointDrives, ARestoredWarmStartWithDrivesContinuesBitIdenticallyOnAnyThread
     // Into a new Data whose drives are off when it is restored (the layout follows the warm start, then the drives).
     Data fresh(model);
     RestoreWarmStart(model, saved, &fresh);
-    EXPECT_EQ(fresh.problem.size(), data.problem.size());
+    EXPECT_EQ(fresh.layout.size(), data.layout.size());
     drive(&fresh);
     State fresh_state = saved_state;
     EXPECT_EQ(run(200, 3, &fresh_state, &fresh), continued);
     // A warm start with a joint that cannot be driven is refused and changes nothing.
     WarmStart wrong = saved;
     wrong.driven_joints = {model.FindJoint("weld")};
-    const int size = fresh.problem.size();
+    const int size = fresh.layout.size();
     EXPECT_THROW(RestoreWarmStart(model, wrong, &fresh), std::invalid_argument);
-    EXPECT_EQ(fresh.problem.size(), size);
+    EXPECT_EQ(fresh.layout.size(), size);
   }
 }
 

@@ -1,6 +1,7 @@
-// Every analytic Jacobian block of the step problem against central finite differences (doc/method.md, pitfall 4), at
-// random points away from the Fischer-Burmeister kink, for moving-fixed and moving-moving pairs of several shapes.
-#include "implicit_sim/core/step/step_problem.h"
+// Every analytic Jacobian block of the step's problems (problems/: the paper's step and RATTLE's two stages) against
+// central finite differences (doc/method.md, pitfall 4), at random points away from the Fischer-Burmeister kink, for
+// moving-fixed and moving-moving pairs of several shapes; and the rows the layout and the evaluation modes promise.
+#include "implicit_sim/core/step/problems/step_problem.h"
 
 #include <random>
 #include <string>
@@ -12,6 +13,7 @@
 
 #include "ncp/test_ncp_problems.h"
 
+#include "step/step_problems_fixture.h"
 #include "test_models.h"
 
 namespace implicit_sim {
@@ -19,71 +21,82 @@ namespace {
 
 // A random point z of the problem (normals kept away from zero, multipliers generic) and the start of a step of
 // 0.05 s from random velocities with the external wrench `wrench` (may be null); returns z.
+using testing_support::StepProblems;
+
+// The problem of each stage (the paper's step; RATTLE's stage 1 and stage 2).
+enum class Stage { kPaper, kRattlePosition, kRattleVelocity };
+
 Eigen::VectorXd BeginAtRandomPoint(const Model& model, unsigned seed, const Eigen::VectorXd* wrench,
-                                   StepProblem* problem) {
+                                   StepProblems* problems) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Eigen::VectorXd z(problem->size());
+  Eigen::VectorXd z(problems->layout.size());
   for (int i = 0; i < z.size(); ++i) z[i] = u(rng);
-  for (const PairBlock& blk : problem->blocks()) z.segment<3>(blk.offset + pair_index::kN) += Vec3(0.3, -0.2, 1.0);
+  for (const PairBlock& blk : problems->layout.blocks()) {
+    z.segment<3>(blk.offset + pair_index::kN) += Vec3(0.3, -0.2, 1.0);
+  }
   State start = State::Initial(model);
   for (int i = 0; i < start.v.size(); ++i) start.v[i] = 2.0 * u(rng);
-  problem->BeginStep(start, 0.05, wrench);
-  problem->ResetTangentAxes(z);
+  problems->kinematics.BeginStep(start, 0.05, wrench);
+  problems->layout.ResetTangentAxes(z);
   return z;
 }
 
 // Compares J with central differences of Phi column by column; reports the worst block by name. In sparse mode the
 // Jacobian comes from the sparse assembly (second evaluation: the recorded pattern replayed) with the friction rows
-// of the sparse solver (set_regular_separated_friction), and the dense Jacobian must equal it entry for entry.
-// With a RATTLE stage (step_rattle.cpp): stage 1 with start frames from another random point for every other pair (the
-// rest on the end frame); stage 2 after BeginVelocityStage from the random point, at a point near its initial guess.
+// of the sparse solver (regular_separated_friction), and the dense Jacobian must equal it entry for entry.
+// With a RATTLE stage: stage 1 with start frames from another random point for every other pair (the rest on the end
+// frame); stage 2 after RattleVelocityProblem::Begin from the random point, at a point near its initial guess.
 // With drives (one per model joint), the joints whose drive is active carry a drive row.
 void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, bool sparse = false,
                                             bool projected = false, double proximal_weight = 0.0,
-                                            StepStage stage = StepStage::kWhole,
+                                            Stage stage = Stage::kPaper,
                                             const std::vector<JointDrive>* drives = nullptr) {
   NcpEvalMode mode;
   mode.project_multipliers = projected;
   Eigen::VectorXd center;
-  StepProblem problem(model);
-  problem.set_regular_separated_friction(sparse);
+  StepProblems problems(model, sparse);
+  const std::vector<PairBlock>& blocks = problems.layout.blocks();
   if (drives) {
+    problems.drives = *drives;
     std::vector<char> driven(model.joints.size());
     for (size_t j = 0; j < driven.size(); ++j) driven[j] = JointDriveActive((*drives)[j]);
     Eigen::VectorXd unused;
-    problem.SetDrivenJoints(driven, nullptr, &unused);
-    problem.set_joint_drives(drives);
+    problems.layout.SetDrivenJoints(driven, nullptr, &unused);
   }
   const Eigen::VectorXd wrench = Eigen::VectorXd::Constant(model.nv(), 0.3);
-  Eigen::VectorXd z = BeginAtRandomPoint(model, seed, &wrench, &problem);
-  if (stage != StepStage::kWhole) {
-    problem.set_stage(StepStage::kPosition);
+  Eigen::VectorXd z = BeginAtRandomPoint(model, seed, &wrench, &problems);
+  if (stage != Stage::kPaper) {
     std::mt19937 rng(seed + 100);
     Eigen::VectorXd frame = z + 0.1 * ncp_test::RandomVector(z.size(), &rng);
-    std::vector<char> known(problem.blocks().size());
+    std::vector<char> known(blocks.size());
     for (size_t c = 0; c < known.size(); ++c) {
       known[c] = c % 2 == 0;
-      frame.segment<3>(problem.blocks()[c].offset + pair_index::kN).normalize();
-      frame[problem.blocks()[c].offset + pair_index::kD] = 0.0;  // touching at the start
+      frame.segment<3>(blocks[c].offset + pair_index::kN).normalize();
+      frame[blocks[c].offset + pair_index::kD] = 0.0;  // touching at the start
     }
-    problem.SetStartFrames(frame, known);
-    for (size_t c = 0; c < known.size(); ++c) EXPECT_EQ(problem.uses_start_frame(static_cast<int>(c)), c % 2 == 0);
+    problems.position.SetStartFrames(frame, known);
+    for (size_t c = 0; c < known.size(); ++c) {
+      EXPECT_EQ(problems.position.uses_start_frame(static_cast<int>(c)), c % 2 == 0);
+    }
   }
-  if (stage == StepStage::kVelocity) {
+  if (stage == Stage::kRattleVelocity) {
     Eigen::VectorXd z2;
-    for (size_t c = 0; c < problem.blocks().size(); ++c) {  // every other pair closed (touching), the rest open
-      z[problem.blocks()[c].offset + pair_index::kD] = c % 2 == 0 ? 0.0 : 0.05;
-      z[problem.blocks()[c].ln()] = c % 2 == 0 ? 0.7 : 0.0;
+    for (size_t c = 0; c < blocks.size(); ++c) {  // every other pair closed (touching), the rest open
+      z[blocks[c].offset + pair_index::kD] = c % 2 == 0 ? 0.0 : 0.05;
+      z[blocks[c].normal_force()] = c % 2 == 0 ? 0.7 : 0.0;
     }
     Eigen::VectorXd raw_rows;
     NcpEvalMode raw;
     raw.raw = true;
-    problem.Evaluate(z, raw, &raw_rows, nullptr);
-    problem.BeginVelocityStage(z, raw_rows, &z2);
+    problems.position.Evaluate(z, raw, &raw_rows, nullptr);
+    problems.velocity.Begin(problems.position, z, raw_rows, &z2);
     std::mt19937 rng(seed + 200);
     z = z2 + 0.2 * ncp_test::RandomVector(z.size(), &rng);
   }
+  const StepProblem& problem = stage == Stage::kPaper            ? static_cast<const StepProblem&>(problems.paper)
+                               : stage == Stage::kRattlePosition ? static_cast<const StepProblem&>(problems.position)
+                                                                 : static_cast<const StepProblem&>(problems.velocity);
   if (proximal_weight > 0.0) {  // a centre away from z
     center = z + Eigen::VectorXd::Constant(z.size(), 0.2);
     mode.proximal_weight = proximal_weight;
@@ -128,25 +141,25 @@ void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, b
 // The RATTLE stages of every model above, dense and sparse.
 TEST(StepProblemJacobian, RattlePositionStage) {
   for (const bool sparse : {false, true}) {
-    ExpectJacobianMatchesFiniteDifferences(test_models::EllipsoidOnGround(), 21, sparse, false, 0.0, StepStage::kPosition);
+    ExpectJacobianMatchesFiniteDifferences(test_models::EllipsoidOnGround(), 21, sparse, false, 0.0, Stage::kRattlePosition);
     ExpectJacobianMatchesFiniteDifferences(test_models::SphereOnTwoSpheres(), 22, sparse, false, 0.0,
-                                           StepStage::kPosition);
+                                           Stage::kRattlePosition);
     ExpectJacobianMatchesFiniteDifferences(test_models::BoxAndSuperellipsoid(), 23, sparse, false, 0.0,
-                                           StepStage::kPosition);
-    ExpectJacobianMatchesFiniteDifferences(test_models::PrismOnGround(7), 24, sparse, false, 0.0, StepStage::kPosition);
-    ExpectJacobianMatchesFiniteDifferences(test_models::JointedRobot(), 25, sparse, false, 0.0, StepStage::kPosition);
+                                           Stage::kRattlePosition);
+    ExpectJacobianMatchesFiniteDifferences(test_models::PrismOnGround(7), 24, sparse, false, 0.0, Stage::kRattlePosition);
+    ExpectJacobianMatchesFiniteDifferences(test_models::JointedRobot(), 25, sparse, false, 0.0, Stage::kRattlePosition);
   }
 }
 
 TEST(StepProblemJacobian, RattleVelocityStage) {
   for (const bool sparse : {false, true}) {
-    ExpectJacobianMatchesFiniteDifferences(test_models::EllipsoidOnGround(), 31, sparse, false, 0.0, StepStage::kVelocity);
+    ExpectJacobianMatchesFiniteDifferences(test_models::EllipsoidOnGround(), 31, sparse, false, 0.0, Stage::kRattleVelocity);
     ExpectJacobianMatchesFiniteDifferences(test_models::SphereOnTwoSpheres(), 32, sparse, false, 0.0,
-                                           StepStage::kVelocity);
+                                           Stage::kRattleVelocity);
     ExpectJacobianMatchesFiniteDifferences(test_models::BoxAndSuperellipsoid(), 33, sparse, true, 0.0,
-                                           StepStage::kVelocity);
-    ExpectJacobianMatchesFiniteDifferences(test_models::PrismOnGround(7), 34, sparse, false, 0.0, StepStage::kVelocity);
-    ExpectJacobianMatchesFiniteDifferences(test_models::JointedRobot(), 35, sparse, false, 0.0, StepStage::kVelocity);
+                                           Stage::kRattleVelocity);
+    ExpectJacobianMatchesFiniteDifferences(test_models::PrismOnGround(7), 34, sparse, false, 0.0, Stage::kRattleVelocity);
+    ExpectJacobianMatchesFiniteDifferences(test_models::JointedRobot(), 35, sparse, false, 0.0, Stage::kRattleVelocity);
   }
 }
 
@@ -173,7 +186,7 @@ TEST(StepProblemJacobian, JointsOfEveryTypeWithLimitsFrictionAndDamping) {
 
 // Projected multipliers (the retry ladder's rung 1b): the friction rows' slip speed max(sigma, 0), whose derivative
 // is 0 where the random point has sigma < 0.
-// Drive rows (step_drives.cpp) on the revolute, prismatic and continuous joints of the jointed robot, in every stage,
+// Drive rows (rows/drive_rows.h) on the revolute, prismatic and continuous joints of the jointed robot, in every stage,
 // dense and sparse: with no effort limit (the law's slope 1) and with limits the law exceeds at the random point (the
 // clamp's slope 0), one joint of each.
 TEST(StepProblemJacobian, JointDriveRowsInEveryStage) {
@@ -186,7 +199,7 @@ TEST(StepProblemJacobian, JointDriveRowsInEveryStage) {
   unsigned seed = 40;
   for (const double limit : {0.0, 1e-3}) {
     model.joints[shoulder].effort_limit = model.joints[slide].effort_limit = model.joints[axle].effort_limit = limit;
-    for (const StepStage stage : {StepStage::kWhole, StepStage::kPosition, StepStage::kVelocity}) {
+    for (const Stage stage : {Stage::kPaper, Stage::kRattlePosition, Stage::kRattleVelocity}) {
       for (const bool sparse : {false, true}) {
         SCOPED_TRACE("effort limit " + std::to_string(limit) + ", stage " + std::to_string(static_cast<int>(stage)) +
                      (sparse ? ", sparse" : ", dense"));
@@ -210,15 +223,17 @@ TEST(StepProblemJacobian, ProximalTerm) {
 // The proximal term moves exactly the rows it names, by the closed-form amounts, and vanishes at the centre.
 TEST(StepProblem, ProximalTermPerturbsOnlyTheForceAndFrictionRows) {
   const Model model = test_models::SphereOnTwoSpheres();
-  StepProblem problem(model);
-  problem.BeginStep(State::Initial(model), 0.01, nullptr);
+  StepProblems problems(model);
+  const StepProblem& problem = problems.paper;
+  problems.kinematics.BeginStep(State::Initial(model), 0.01, nullptr);
   std::mt19937 rng(21);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   Eigen::VectorXd z(problem.size());
   for (int i = 0; i < z.size(); ++i) z[i] = u(rng);
-  problem.ResetTangentAxes(z);
-  const PairBlock& blk = problem.blocks()[0];
-  z[blk.ln()] = 2.0 * problem.force_scale();  // a positive normal force and a large gap: FB is b there
+  problems.layout.ResetTangentAxes(z);
+  const PairBlock& blk = problems.layout.blocks()[0];
+  const double Fs = problems.kinematics.force_scale();
+  z[blk.normal_force()] = 2.0 * Fs;  // a positive normal force and a large gap: FB is b there
   z[blk.offset + pair_index::kD] = -0.5;
   Eigen::VectorXd plain, perturbed, at_center;
   problem.Evaluate(z, NcpEvalMode(), &plain, nullptr);
@@ -229,12 +244,12 @@ TEST(StepProblem, ProximalTermPerturbsOnlyTheForceAndFrictionRows) {
   problem.Evaluate(z, proximal, &at_center, nullptr);
   EXPECT_EQ((at_center - plain).lpNorm<Eigen::Infinity>(), 0.0);  // no perturbation at the centre
   center[blk.offset + pair_index::kSt] -= 0.1;
-  center[blk.ln()] -= 0.5 * problem.force_scale();
+  center[blk.normal_force()] -= 0.5 * Fs;
   center[0] -= 1.0;  // a velocity: its row has no proximal term
   problem.Evaluate(z, proximal, &perturbed, nullptr);
   const Eigen::VectorXd change = perturbed - plain;
   EXPECT_NEAR(change[blk.offset + pair_index::kSt], 2.0 * 0.1, 1e-12);
-  EXPECT_NE(change[blk.ln()], 0.0);
+  EXPECT_NE(change[blk.normal_force()], 0.0);
   int changed = 0;
   for (int i = 0; i < change.size(); ++i) changed += change[i] != 0.0;
   EXPECT_EQ(changed, 2);
@@ -251,12 +266,12 @@ TEST(StepProblem, ProximalTermPerturbsOnlyTheForceAndFrictionRows) {
 // The closest-point blocks the sparse solver condenses (NcpProblem::CondensableBlocks) touch only their own unknowns
 // and the velocities of the moving bodies, and the condensed LU of the sparse Jacobian solves like a dense LU of it.
 void ExpectCondensableBlocksAreLocal(const Model& model, unsigned seed) {
-  StepProblem problem(model);
-  problem.set_regular_separated_friction(true);
-  const Eigen::VectorXd z = BeginAtRandomPoint(model, seed, nullptr, &problem);
+  StepProblems problems(model, /*regular_separated_friction=*/true);
+  const StepProblem& problem = problems.paper;
+  const Eigen::VectorXd z = BeginAtRandomPoint(model, seed, nullptr, &problems);
   std::vector<int> starts, indices;
   problem.CondensableBlocks(&starts, &indices);
-  ASSERT_EQ(starts.size(), problem.blocks().size() + 1);
+  ASSERT_EQ(starts.size(), problems.layout.blocks().size() + 1);
   std::vector<int> block_of(z.size(), -1);
   for (size_t p = 0; p + 1 < starts.size(); ++p) {
     for (int k = starts[p]; k < starts[p + 1]; ++k) block_of[indices[k]] = static_cast<int>(p);
@@ -264,7 +279,7 @@ void ExpectCondensableBlocksAreLocal(const Model& model, unsigned seed) {
   SparseJacobian J;
   Eigen::VectorXd Phi;
   problem.EvaluateSparse(z, NcpEvalMode(), &Phi, &J);
-  const int num_velocities = 6 * static_cast<int>(problem.slots().size());
+  const int num_velocities = 6 * static_cast<int>(problems.layout.slots().size());
   int condensed_rows = 0;
   for (int col = 0; col < z.size(); ++col) {
     for (Eigen::SparseMatrix<double>::InnerIterator it(J.matrix, col); it; ++it) {
@@ -301,14 +316,15 @@ TEST(StepProblemJacobian, SparseAssemblyWithSeparatedFrictionRows) {
 // friction push along the slip); the plain rows and the raw rows (Ipopt's, the independent NCP check's) keep sigma.
 TEST(StepProblem, FrictionRowsClampANegativeSlipSpeedButRawRowsDoNot) {
   const Model model = test_models::SphereOnTwoSpheres();
-  StepProblem problem(model);
-  problem.BeginStep(State::Initial(model), 0.01, nullptr);
+  StepProblems problems(model);
+  const StepProblem& problem = problems.paper;
+  problems.kinematics.BeginStep(State::Initial(model), 0.01, nullptr);
   std::mt19937 rng(13);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   Eigen::VectorXd z(problem.size());
   for (int i = 0; i < z.size(); ++i) z[i] = u(rng);
-  problem.ResetTangentAxes(z);
-  const PairBlock& blk = problem.blocks()[0];
+  problems.layout.ResetTangentAxes(z);
+  const PairBlock& blk = problems.layout.blocks()[0];
   const int friction_row = blk.offset + pair_index::kSt;
   Eigen::VectorXd at_zero = z, negative = z, Phi_zero, Phi_negative;
   at_zero[blk.sigma()] = 0.0;
@@ -330,9 +346,9 @@ TEST(StepProblem, FrictionRowsClampANegativeSlipSpeedButRawRowsDoNot) {
 
 TEST(StepProblem, LayoutCountsUnknownsAndRowsOfEveryPair) {
   const Model model = test_models::BoxAndSuperellipsoid();
-  StepProblem problem(model);
+  const StepLayout layout(model);
   // 2 moving bodies x 6; pairs: box-super (13 + 6 + 1 + 2), box-ground (13 + 6 + 1 + 2), super-ground (13 + 1 + 1 + 2)
-  EXPECT_EQ(problem.size(), 12 + 22 + 22 + 17);
+  EXPECT_EQ(layout.size(), 12 + 22 + 22 + 17);
 }
 
 }  // namespace

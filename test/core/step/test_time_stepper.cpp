@@ -75,7 +75,7 @@ TEST(TimeStepper, ATiltedCylinderAboveTheGroundFallsFreelyFromAColdStartOnItsRim
   EXPECT_NEAR(state.v_WB(0).z(), -9.81 * 0.005, 1e-12);
   EXPECT_GT(data.contacts[0].gap, 0.02);
   // Both the side and the cap carry the normal at the rim point.
-  const PairBlock& blk = data.problem.blocks()[0];
+  const PairBlock& blk = data.layout.blocks()[0];
   const int body1_ineq = blk.k1;
   int positive = 0;
   for (int k = 0; k < body1_ineq; ++k) positive += data.z[blk.offset + pair_index::kAlpha + k] > 1e-6;

@@ -10,7 +10,7 @@
 #include <Eigen/Core>
 
 #include "implicit_sim/core/ncp/semismooth_newton.h"
-#include "implicit_sim/core/step/step_problem.h"
+#include "implicit_sim/core/step/problems/step_problem.h"
 
 namespace implicit_sim {
 

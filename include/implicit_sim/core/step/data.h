@@ -14,57 +14,43 @@
 #include "implicit_sim/core/model/joints.h"
 #include "implicit_sim/core/model/model.h"
 #include "implicit_sim/core/model/state.h"
-#include "implicit_sim/core/ncp/semismooth_newton.h"
 #include "implicit_sim/core/step/block_predictor.h"
-#include "implicit_sim/core/step/step_problem.h"
+#include "implicit_sim/core/step/contact_result.h"
+#include "implicit_sim/core/step/kinematics.h"
+#include "implicit_sim/core/step/layout.h"
+#include "implicit_sim/core/step/options.h"
+#include "implicit_sim/core/step/schemes/island_scheme.h"
 #include "implicit_sim/core/step/step_report.h"
 
 namespace implicit_sim {
 
-// Contact quantities at the end of a step, derived from a solution z.
-struct ContactResult {
-  int pair = -1;                                     // the model pair
-  Vec3 p_WA1 = Vec3::Zero(), p_WA2 = Vec3::Zero();  // closest points (m)
-  Vec3 n_W = Vec3::UnitZ();                          // unit normal from body 2 towards body 1
-  double gap = 0.0;                                  // signed distance d (m)
-  double normal_force = 0.0;                         // N
-  Vec3 friction_force_W = Vec3::Zero();              // tangential force on body 1 (N)
-  double torsional_moment = 0.0;                     // about n (N m)
-  double slip_speed = 0.0;                           // tangential relative speed at the contact (m/s)
-};
-
 // One island's solve (step/islands.h): the moving bodies joined by pairs in the NCP or by joints, with their joints and
-// pairs, as a step problem of its own with its own solvers, warm start, retry ladder and sub-steps.
+// pairs, as a layout of its own with its own scheme (its problems and solvers), warm start, retry ladder and sub-steps.
 struct IslandSolve {
-  explicit IslandSolve(const Model& model);
-  // --- membership (ascending): velocity slots, model joints, model pairs and their blocks in Data::problem ---
+  // drives: Data::joint_drives, read by the problems of the island's scheme.
+  IslandSolve(const Model& model, const std::vector<JointDrive>& drives);
+  ~IslandSolve();
+  // --- membership (ascending): velocity slots, model joints, model pairs and their blocks in Data::layout ---
   std::vector<int> slots, joints, pairs, blocks;
   std::vector<int> next_slots, next_joints, next_pairs, new_blocks;  // PartitionIslands' workspace
-  // --- the island's problem and its solvers: dense LU up to kDenseSizeLimit unknowns, sparse (KLU) above, where a
-  // dense LU would cost O(n^3) per iteration (a pile, or a 1000-gon disc: one pair with about 1000 unknowns) ---
-  StepProblem problem;
-  SemismoothNewton dense_solver, sparse_solver;
-  // The RATTLE step's velocity stage has Jacobians of another pattern: solvers of its own keep both analyses.
-  SemismoothNewton velocity_dense_solver, velocity_sparse_solver;
-  SemismoothNewton& solver() {
-    const bool sparse = problem.size() > kDenseSizeLimit;
-    if (problem.stage() == StepStage::kVelocity) return sparse ? velocity_sparse_solver : velocity_dense_solver;
-    return sparse ? sparse_solver : dense_solver;
-  }
+  // --- the island's layout, the kinematics of its step, and its scheme (built for StepperOptions::scheme) ---
+  StepLayout layout;
+  StepKinematics kinematics;
+  const std::vector<JointDrive>& drives;
+  std::unique_ptr<IslandScheme> scheme;
+  // The scheme for options.scheme (built anew only when the scheme changes).
+  IslandScheme& SchemeFor(StepperOptions::Scheme kind);
   BlockPredictor predictor;  // StepperOptions::predictor_sweeps
-  static constexpr int kDenseSizeLimit = 200;
   // --- the warm start (gathered from Data::z) and the workspace of the island's retry ladder and sub-steps ---
   bool has_warm_start = false;
-  Eigen::VectorXd z;               // the solution (the warm start of the next solve)
+  Eigen::VectorXd z;               // the solution of the pose problem (the warm start of the next solve)
   Eigen::VectorXd z_start;         // the initial guess of the current solve
   Eigen::VectorXd z_best;          // the best iterate of the ladder so far
   Eigen::VectorXd z_center;        // the proximal rung's centre
   Eigen::VectorXd z_cold;          // the cold attempt's end, kept across the proximal rung for the continuation
   Eigen::VectorXd ncp_error_rows;  // the raw rows of the accepted solution (ncp_error.h)
-  // RATTLE: per block, whether z holds the pair's closest points at the start of the step (its start frame), and the
-  // velocity stage's solution (z then holds stage 1's, the warm start of the next step).
+  // Per block, whether z holds the pair's closest points at the start of the step (RATTLE's start frames).
   std::vector<char> frame_known;
-  Eigen::VectorXd z_velocity;
   std::vector<Vec3> axes_warm_failed;
   std::vector<Eigen::VectorXd> z_backup;  // per sub-step depth
   // --- outputs of the island's step ---
@@ -76,6 +62,8 @@ struct IslandSolve {
 };
 
 class Data {
+  const Model* model_;
+
  public:
   static constexpr int kMaxSubstepDepth = 4;  // a failed step is split down to h / 16
   static constexpr int kMaxBroadPhaseRounds = 4;  // re-solves of one step after its end-of-step check added pairs
@@ -97,13 +85,11 @@ class Data {
   // Levenberg-Marquardt fallbacks of every island's Newton solver so far.
   int lm_fallbacks() const;
 
- private:
-  const Model* model_;
-
- public:
-  // --- the step problem of the whole model: the layout of the warm start z (its pairs and their tangent axes) ---
+  // --- the layout of the whole model: the layout of the warm start z (its pairs and their tangent axes), and the
+  // step's start (for the seeds of pairs the broad phase adds) ---
   const bool broad_phase;
-  StepProblem problem;
+  StepLayout layout;
+  StepKinematics kinematics;
   // --- the warm start (see WarmStart) ---
   Eigen::VectorXd z;            // the last solution (warm start of the next step)
   bool has_warm_start = false;
@@ -131,12 +117,12 @@ class Data {
   // pair). With every pair in the NCP, contacts[c] belongs to model pair c. ---
   std::vector<ContactResult> contacts;
   // The step-average effort each joint's limits exerted in the last step (N m or N, positive towards increasing
-  // position; 0 for a joint without limits or not yet stepped), one per model joint (StepProblem::JointLimitEffort of
+  // position; 0 for a joint without limits or not yet stepped), one per model joint (StepLayout::JointLimitEffort of
   // the step's solution: with the RATTLE scheme, its total over both stages).
   std::vector<double> joint_limit_effort;
   // The effort each joint's drive applied in the last step (N m or N, positive towards increasing position; 0 for a
   // joint without an active drive or not yet stepped), one per model joint: with the RATTLE scheme the step's average
-  // over both stages (StepProblem::JointDriveEffort).
+  // over both stages (StepLayout::JointDriveEffort).
   std::vector<double> joint_drive_effort;
 };
 

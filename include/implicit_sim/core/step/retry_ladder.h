@@ -1,7 +1,7 @@
 // The retry ladder of one step solve: what the stepper tries, in order, until the step NCP is solved.
 //   1. warm start: the previous step's solution carried over the step (seeding.h), by the primary solver;
-//   1a. (RATTLE stage 1) the same start with every pair on its end-of-step frame instead of its start frame
-//       (StepReport::end_frame_retries);
+//   1a. the same start on the problem's fallback formulation, if it has one (StepProblem::UseFallbackFrames: RATTLE's
+//       stage 1 with every pair on its end-of-step frame instead of its start frame; StepReport::end_frame_retries);
 //   1b. the same start by Newton with projected multipliers (ncp_problem.h; with StepperOptions::projected_retries,
 //       the default, this rung and every later Newton solve project);
 //   2. cold start: fresh closest points, normals and friction seeds;
@@ -13,7 +13,8 @@
 //   4. Ipopt on the complementarity-penalty NLP (ncp/ipopt_ncp.h) from the best of rungs 1-2, polished by Newton.
 // Without a warm start the ladder begins at rung 2. With the Ipopt solver as the primary one it stops after rung 2.
 // When every rung fails the best finite iterate is kept; the stepper then splits the step (time_stepper.h).
-// The RATTLE step's velocity stage has a ladder of its own (SolveVelocityStage), and its failure splits the step too.
+// A later stage (RATTLE's stage 2) solves from a guess by the short ladder SolveFromGuess; its failure splits the step
+// too. Every rung works on any step problem (problems/step_problem.h) and its own solvers.
 #pragma once
 
 #include "implicit_sim/core/model/model.h"
@@ -21,21 +22,25 @@
 #include "implicit_sim/core/ncp/ncp_summary.h"
 #include "implicit_sim/core/step/data.h"
 #include "implicit_sim/core/step/options.h"
+#include "implicit_sim/core/step/problems/step_problem.h"
+#include "implicit_sim/core/step/schemes/island_scheme.h"
 #include "implicit_sim/core/step/step_report.h"
 
 namespace implicit_sim {
 
-// Solves the step NCP of an island (island->problem: BeginStep called for `state`, its pairs laid out) from its warm
-// start if it has one and leaves the best solution in island->z (and its tangent axes in the problem); does not touch
-// the state. Counts the rungs and iterations in *report. The summary is that of the accepted solve. The Ipopt rung is
-// tried by problems of up to 600 unknowns, and by larger ones when `last_chance` (the shortest sub-step): above that
-// size it costs seconds and halving the step first is cheaper.
+// Solves `problem` (the island's pose problem: its kinematics' BeginStep called for `state`, its layout
+// island->layout) from the island's warm start if it has one and leaves the best solution in island->z (and its
+// tangent axes in the layout); does not touch the state. Counts the rungs and iterations in *report. The summary is
+// that of the accepted solve. The Ipopt rung is tried by problems of up to 600 unknowns, and by larger ones when
+// `last_chance` (the shortest sub-step): above that size it costs seconds and halving the step first is cheaper.
 NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& options, const State& state,
-                                IslandSolve* island, bool last_chance, StepReport* report);
+                                StepProblem& problem, NewtonSolvers* solvers, IslandSolve* island, bool last_chance,
+                                StepReport* report);
 
-// The velocity stage of the RATTLE step (island->problem in StepStage::kVelocity, its initial guess in
-// island->z_velocity from BeginVelocityStage): Newton from that guess; again with projected multipliers; a smoothing
-// continuation from it. Leaves the best iterate in island->z_velocity and counts the rungs in *report.
-NcpSummary SolveVelocityStage(const StepperOptions& options, IslandSolve* island, StepReport* report);
+// The short ladder of a later stage from the guess in *z: Newton; again with projected multipliers; a smoothing
+// continuation from the guess. Leaves the best iterate in *z (island->z_start and z_best serve as workspace) and
+// counts the rungs in *report.
+NcpSummary SolveFromGuess(const StepperOptions& options, const StepProblem& problem, NewtonSolvers* solvers,
+                          Eigen::VectorXd* z, IslandSolve* island, StepReport* report);
 
 }  // namespace implicit_sim

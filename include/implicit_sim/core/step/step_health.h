@@ -7,6 +7,7 @@
 #include "implicit_sim/core/model/model.h"
 #include "implicit_sim/core/model/state.h"
 #include "implicit_sim/core/step/data.h"
+#include "implicit_sim/core/step/kinematics.h"
 
 namespace implicit_sim {
 
@@ -32,7 +33,8 @@ double MaxPenetrationBound(const Model& model, const State& state, double tolera
 // n), carried back with body 2 to body 2's start pose, must not have all of body 1's start pose strictly behind it
 // (closed-form support points, or the bounding sphere). Returns the block of the first pair that crossed, -1 if none;
 // *detail (if not null) then names the pair. No heap allocation unless a pair crossed and detail is given.
-int FindCrossing(const Model& model, const State& start, const StepProblem& problem, const Eigen::VectorXd& z,
+// kinematics: the step's (its layout's pairs are checked, its end poses used).
+int FindCrossing(const Model& model, const State& start, const StepKinematics& kinematics, const Eigen::VectorXd& z,
                  std::string* detail);
 
 // True if a moving body is faster than max_speed (m/s) or spins faster than max_angular_speed (rad/s).

@@ -1,0 +1,40 @@
+// The Coulomb friction rows, one emitter for contact friction (three components: t, o and the torsion r) and joint
+// friction (one component), in every problem of the step (paper eq. 10 with its typo fixed, divided by mu e ln so that
+// it stays regular at ln = 0; doc/method.md):
+//   slip rows        rate_k + s_k slip = 0                        (k < count; rate_k = e_k times the sliding rate)
+//   ellipsoid row    FB(sigma, zeta) = 0,  zeta = 1 - sum s_k^2   (sigma _|_ the friction ellipsoid, paper eq. 5)
+// slip is the slip speed sigma as the rows read it (ProjectedSlip; plus max(d, 0) / h with the separated-friction
+// regularization). The derivatives of rate_k by the velocities, the normal and the closest points depend on the
+// frame and are emitted by the caller.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "implicit_sim/core/step/rows/row_writer.h"
+
+namespace implicit_sim {
+
+struct FrictionRows {
+  int first_row = 0;   // the row (and unknown) of s_0; s_k at first_row + k
+  int count = 1;       // 1 (a joint) or 3 (a contact: t, o, r)
+  int sigma = 0;       // the row and unknown of sigma
+  double rate[3] = {0.0, 0.0, 0.0};  // e_k times the sliding rate along component k (m/s or rad/s)
+  double s[3] = {0.0, 0.0, 0.0};     // the friction fractions s_k
+  double slip = 0.0;          // the slip speed as the slip rows read it
+  double dslip_dsigma = 1.0;  // its derivative by sigma
+  int gap = -1;               // the gap unknown d if slip depends on it (-1: none)
+  double dslip_dgap = 0.0;
+  double sigma_value = 0.0;   // sigma itself (the ellipsoid row's variable side)
+  double zeta = 1.0;          // 1 - sum s_k^2, as the caller writes it
+  // The proximal rung's term (ncp_problem.h) on the slip rows: weight (m/s per unit of s) and the centre's s_k.
+  double proximal_weight = 0.0;
+  const double* proximal_center = nullptr;
+};
+
+// The slip speed of NcpEvalMode::project_multipliers: max(sigma, 0) on the slip rows (equal at every solution), so
+// that a negative iterate does not make friction push along the slip; the raw rows keep sigma. derivative: 0 or 1.
+double ProjectedSlip(const NcpEvalMode& mode, double sigma, double* derivative);
+
+void AddFrictionRows(const FrictionRows& rows, const RowWriter& out);
+
+}  // namespace implicit_sim

@@ -1,0 +1,33 @@
+// What every row emitter of rows/ reads: the layout, the step's kinematics, the bodies at the end of the step for the
+// current iterate, the iterate z, and where the rows go (RowWriter).
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "implicit_sim/core/step/kinematics.h"
+#include "implicit_sim/core/step/layout.h"
+#include "implicit_sim/core/step/rows/row_writer.h"
+
+namespace implicit_sim {
+
+struct RowContext {
+  const StepLayout& layout;
+  const StepKinematics& kinematics;
+  const std::vector<BodyEnd>& ends;  // per entry of layout.bodies()
+  const Eigen::VectorXd& z;
+  const RowWriter& out;
+  const Model& model() const { return layout.model(); }
+  double h() const { return kinematics.h(); }
+  double Fs() const { return kinematics.force_scale(); }
+  // A joint's parent (the world: identity pose, no velocity unknowns) and child at the end of the step.
+  const BodyEnd& ParentEnd(int joint) const {
+    const int parent = layout.joint_bodies(joint).parent;
+    return parent < 0 ? kWorld : ends[parent];
+  }
+  const BodyEnd& ChildEnd(int joint) const { return ends[layout.joint_bodies(joint).child]; }
+  static const BodyEnd kWorld;
+};
+
+}  // namespace implicit_sim
