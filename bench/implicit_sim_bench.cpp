@@ -181,7 +181,7 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const 
       Field("variant", Quoted(c.variant)),
       Field("bodies", std::to_string(model.num_moving())),
       Field("h", FormatNumber(c.h)),
-      Field("scheme", Quoted(options.scheme == StepperOptions::Scheme::kRattle ? "rattle" : "paper")),
+      Field("scheme", Quoted(OptionChoiceName(*FindOptionByField("scheme"), options))),
       Field("steps", std::to_string(summary.steps)),
       Field("completed", summary.steps == steps ? "true" : "false"),
       Field("simulated_s", FormatNumber(summary.steps * c.h)),

@@ -155,7 +155,7 @@ int main(int argc, char** argv) {
     RunSummary summary;
     summary.scene = model.scene_name;
     summary.h = options.h;
-    summary.scheme = options.scheme == StepperOptions::Scheme::kRattle ? "rattle" : "paper";
+    summary.scheme = OptionChoiceName(*FindOptionByField("scheme"), options);
     summary.kinetic_energy_initial = KineticEnergy(model, state);
     for (int pair = 0; !data.broad_phase && pair < static_cast<int>(model.pairs.size()); ++pair) {
       summary.pairs.emplace_back(model.PairName(pair), model.pairs[pair].friction);

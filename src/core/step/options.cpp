@@ -152,6 +152,10 @@ const OptionRow* FindOptionByRunnerFlag(std::string_view flag) {
   return FindRow(flag, [](const OptionRow& row) { return row.runner_flag; });
 }
 
+const char* OptionChoiceName(const OptionRow& row, const StepperOptions& options) {
+  return row.choices[static_cast<int>(row.get(options))];
+}
+
 std::string OptionRangeText(const OptionRow& row) {
   if (row.kind == OptionKind::kChoice) {
     std::string text;

@@ -81,7 +81,7 @@ TEST(Allocation, AThousandWarmStepsAllocateNothing) {
   }
 }
 
-// Joint drives (step_drives.cpp) whose targets change every step, on the gripper: the drive unknowns stay in the
+// Joint drives (rows/drive_rows.h) whose targets change every step, on the gripper: the drive unknowns stay in the
 // layout, so a warm step allocates nothing either.
 TEST(Allocation, AThousandWarmStepsWithJointDrivesAllocateNothing) {
   const Model model = LoadSceneFromFile(testing_support::ScenePath("gripper_lift.urdf"));

@@ -1,4 +1,4 @@
-// Joint drives (joints.h, JointDrive; step_drives.cpp): PD drives evaluated implicitly at the end of the step, clamped
+// Joint drives (joints.h, JointDrive; rows/drive_rows.h): PD drives evaluated implicitly at the end of the step, clamped
 // to the effort limit by a box law. The closed-form damped oscillator, stiffness at any gain, saturation, a gripper
 // that closes and lifts by position, refused drives, bit-identity without drives, drives turned on and off, and a
 // restored warm start with drives.

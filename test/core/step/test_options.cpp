@@ -107,6 +107,10 @@ TEST(Options, ParsesNumbersAndChoicesFromText) {
   StepperOptions options;
   solver.set(&options, value);
   EXPECT_EQ(options.solver, StepperOptions::Solver::kIpopt);
+  EXPECT_STREQ(OptionChoiceName(solver, options), "ipopt");
+  EXPECT_STREQ(OptionChoiceName(*FindOptionByField("scheme"), StepperOptions()), "rattle");
+  options.scheme = StepperOptions::Scheme::kPaper;
+  EXPECT_STREQ(OptionChoiceName(*FindOptionByField("scheme"), options), "paper");
   EXPECT_FALSE(ParseOptionValue(solver, "path", "--solver", &value, &error));
   EXPECT_EQ(error, "--solver must be newton or ipopt, got 'path'");
   EXPECT_TRUE(ParseOptionValue(iterations, "1e3", "--max-iterations", &value, &error));

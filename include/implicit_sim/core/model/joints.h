@@ -1,5 +1,5 @@
 // Joint kinematics: the constraint functions of a joint, its position and velocity, and the wrench of a joint effort.
-// The step NCP (step_problem.h), the runner and the ROS node share them.
+// The step (step/rows/joint_rows.h), the runner and the ROS node share them.
 //
 // A joint joins the joint origin x_P = p_P + R_P p_PJ on its parent to x_C = p_C + R_C p_CJ on its child, and the
 // joint frames' axes U_k = R_P R_PJ e_k and W_k = R_C R_CJ e_k (k = 0: the axis a, 1 and 2: b1 and b2 normal to it).
@@ -49,7 +49,7 @@ void JointDrift(const Model& model, const State& state, double* position_m, doub
 double ClampJointEffort(const Joint& joint, double commanded);
 
 // A PD drive of one joint (MuJoCo's position and velocity actuators, Gazebo's and PhysX's joint drives), one per model
-// joint in Data::joint_drives. The step evaluates it implicitly, at the END of the step (StepProblem, step_drives.cpp):
+// joint in Data::joint_drives. The step evaluates it implicitly, at the END of the step (step/rows/drive_rows.h):
 //   tau = clamp(stiffness (position_target - q) + damping (velocity_target - qdot), -E, E)
 // with q, qdot the end-of-step joint position and rate, E = Joint::effort_limit (no clamp when it is 0), so that it is
 // stable at any gain. It adds to a commanded effort (AddJointEffortWrench) and to the joint's own damping. Inactive

@@ -25,7 +25,7 @@ struct NcpEvalMode {
   double regularization = 0.0;
   // Projected multipliers: the problem's equation rows may read a complementarity unknown at max(z_i, 0), its value
   // at every solution, so that an iterate with a negative multiplier does not act with the wrong sign (the step's
-  // friction rows, step_problem.h). The complementarity rows and the raw rows keep z_i.
+  // friction rows, step/rows/friction_rows.h). The complementarity rows and the raw rows keep z_i.
   bool project_multipliers = false;
   // A proximal-point term (the retry ladder's proximal rung): the problem may add proximal_weight (z_i - c_i), with c
   // = *proximal_center, to the function side of the rows it chooses (the step: its contact force and friction

@@ -83,6 +83,9 @@ const OptionRow* FindOptionByField(std::string_view field);
 const OptionRow* FindOptionByRosParam(std::string_view name);
 const OptionRow* FindOptionByRunnerFlag(std::string_view flag);
 
+// The name of a choice row's value in `options`, e.g. "rattle" for the row "scheme" of default options.
+const char* OptionChoiceName(const OptionRow& row, const StepperOptions& options);
+
 // "(0, 0.1]", "[1, 100000]", "[0, inf)" or, for a choice, "newton or ipopt".
 std::string OptionRangeText(const OptionRow& row);
 

@@ -1,5 +1,5 @@
-// The geometrically implicit time stepper: one mixed NCP per step (paper Sections III-IV), solved by semismooth
-// Newton. Usage:
+// The geometrically implicit time stepper (paper Sections III-IV): per island and step one mixed NCP (the paper's step)
+// or two (the RATTLE step's stages; StepperOptions::scheme, schemes/), solved by semismooth Newton. Usage:
 //   StepperOptions options;  options.h = 0.01;
 //   Data data(model);        // every derived quantity and the solver workspace, allocated once
 //   State state = State::Initial(model);
