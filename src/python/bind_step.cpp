@@ -110,26 +110,15 @@ py::array_t<double> WrenchAtPoint(const Model& model, const PyState& state, int 
 }
 
 void BindReport(py::module_& m) {
-  py::class_<StepReport>(m, "StepReport", "What a step did (step/step_report.h)")
-      .def_readonly("converged", &StepReport::converged)
+  py::class_<StepReport> report(m, "StepReport", "What a step did (step/step_report.h)");
+  for (const StepCounter& counter : StepCounterTable()) {  // iterations, cold_restarts, ... (the counter table)
+    const auto field = counter.field;
+    report.def_property_readonly(counter.name, [field](const StepReport& r) { return r.*field; });
+  }
+  report.def_readonly("converged", &StepReport::converged)
       .def_readonly("advanced", &StepReport::advanced)
-      .def_readonly("iterations", &StepReport::iterations)
       .def_readonly("residual", &StepReport::residual)
       .def_readonly("complementarity_error", &StepReport::complementarity_error)
-      .def_readonly("active_contacts", &StepReport::active_contacts)
-      .def_readonly("pairs_in_ncp", &StepReport::pairs_in_ncp)
-      .def_readonly("islands", &StepReport::islands)
-      .def_readonly("largest_island", &StepReport::largest_island)
-      .def_readonly("residual_evaluations", &StepReport::residual_evaluations)
-      .def_readonly("projected_solves", &StepReport::projected_solves)
-      .def_readonly("end_frame_retries", &StepReport::end_frame_retries)
-      .def_readonly("cold_restarts", &StepReport::cold_restarts)
-      .def_readonly("proximal_solves", &StepReport::proximal_solves)
-      .def_readonly("smoothed_solves", &StepReport::smoothed_solves)
-      .def_readonly("ipopt_solves", &StepReport::ipopt_solves)
-      .def_readonly("substeps", &StepReport::substeps)
-      .def_readonly("crossings", &StepReport::crossings)
-      .def_readonly("broad_phase_additions", &StepReport::broad_phase_additions)
       .def_readonly("joint_position_error", &StepReport::joint_position_error, "m")
       .def_readonly("joint_angle_error", &StepReport::joint_angle_error, "rad")
       .def_readonly("wall_time_s", &StepReport::wall_time_s)

@@ -14,14 +14,9 @@ void RunSummary::Add(const StepReport& report, const Data& data) {
   ++steps;
   wall_s += report.wall_time_s;
   if (!report.converged) ++nonconverged_steps;
-  cold_restarts += report.cold_restarts;
-  end_frame_retries += report.end_frame_retries;
-  substeps += report.substeps;
-  crossings += report.crossings;
-  proximal_solves += report.proximal_solves;
-  smoothed_solves += report.smoothed_solves;
-  ipopt_solves += report.ipopt_solves;
-  broad_phase_additions += report.broad_phase_additions;
+  for (const StepCounter& counter : StepCounterTable()) {
+    if (counter.run_total) totals.*counter.field += report.*counter.field;
+  }
   max_pairs_in_ncp = std::max(max_pairs_in_ncp, report.pairs_in_ncp);
   max_iterations = std::max(max_iterations, report.iterations);
   max_residual = std::max(max_residual, report.residual);
@@ -43,14 +38,9 @@ std::string RunSummary::ToJson() const {
   json += "  \"max_joint_position_error\": " + FormatNumber(max_joint_position_error) + ",\n";
   json += "  \"max_joint_angle_error\": " + FormatNumber(max_joint_angle_error) + ",\n";
   json += "  \"nonconverged_steps\": " + std::to_string(nonconverged_steps) + ",\n";
-  json += "  \"cold_restarts\": " + std::to_string(cold_restarts) + ",\n";
-  json += "  \"end_frame_retries\": " + std::to_string(end_frame_retries) + ",\n";
-  json += "  \"proximal_solves\": " + std::to_string(proximal_solves) + ",\n";
-  json += "  \"smoothed_solves\": " + std::to_string(smoothed_solves) + ",\n";
-  json += "  \"ipopt_solves\": " + std::to_string(ipopt_solves) + ",\n";
-  json += "  \"substeps\": " + std::to_string(substeps) + ",\n";
-  json += "  \"crossings\": " + std::to_string(crossings) + ",\n";
-  json += "  \"broad_phase_additions\": " + std::to_string(broad_phase_additions) + ",\n";
+  for (const StepCounter& counter : StepCounterTable()) {
+    if (counter.run_total) json += "  \"" + std::string(counter.name) + "\": " + std::to_string(totals.*counter.field) + ",\n";
+  }
   json += "  \"max_pairs_in_ncp\": " + std::to_string(max_pairs_in_ncp) + ",\n";
   json += "  \"max_iterations\": " + std::to_string(max_iterations) + ",\n";
   json += "  \"max_residual\": " + FormatNumber(max_residual) + ",\n";

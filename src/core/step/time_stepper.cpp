@@ -251,27 +251,6 @@ void StepIsland(void* context, int index) {
   island->advanced = AdvanceIsland(*task->first, task->first->options->h, 0, island);
 }
 
-// Adds an island's report to the step's: counts add up, residuals take the largest, the first island's fault wins.
-void MergeReport(const StepReport& island, StepReport* step) {
-  step->converged = step->converged && island.converged;
-  step->projected_solves += island.projected_solves;
-  step->end_frame_retries += island.end_frame_retries;
-  step->cold_restarts += island.cold_restarts;
-  step->proximal_solves += island.proximal_solves;
-  step->smoothed_solves += island.smoothed_solves;
-  step->ipopt_solves += island.ipopt_solves;
-  step->substeps += island.substeps;
-  step->crossings += island.crossings;
-  step->iterations += island.iterations;
-  step->residual_evaluations += island.residual_evaluations;
-  step->residual = std::max(step->residual, island.residual);
-  step->complementarity_error = std::max(step->complementarity_error, island.complementarity_error);
-  if (step->fault == StepFault::kNone && island.fault != StepFault::kNone) {
-    step->fault = island.fault;
-    step->fault_detail = island.fault_detail;
-  }
-}
-
 // Solves the step's islands from `state` (at the step start) and advances *state; returns false if an island could
 // not be advanced (the state is then partly advanced: Step restores it).
 bool SolveIslands(const Model& model, const StepperOptions& options, const Eigen::VectorXd* wrench, State* state,
@@ -294,7 +273,7 @@ bool SolveIslands(const Model& model, const StepperOptions& options, const Eigen
   data->contacts.resize(data->layout.blocks().size());  // one per pair in the NCP, whatever a caller left in it
   for (int i = 0; i < data->num_islands; ++i) {
     const IslandSolve& island = *data->islands[i];
-    MergeReport(island.report, report);
+    MergeIslandReport(island.report, report);
     advanced = advanced && island.advanced;
     report->largest_island = std::max(report->largest_island, static_cast<int>(island.slots.size()));
     if (island.advanced) ScatterIsland(island, data);

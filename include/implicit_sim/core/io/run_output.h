@@ -28,14 +28,9 @@ struct RunSummary {
   double wall_s = 0.0;                 // time spent in Step (s)
   double max_penetration = 0.0;        // max over steps and pairs of max(0, -gap) (m)
   int nonconverged_steps = 0;
-  int cold_restarts = 0;
-  int end_frame_retries = 0;           // RATTLE stage-1 retries on the end-of-step frames
-  int proximal_solves = 0;             // solves that reached the proximal-point rung
-  int smoothed_solves = 0;             // solves that reached the smoothing continuation
-  int ipopt_solves = 0;                // Ipopt solves (primary solver or ladder rung)
-  int substeps = 0;                    // step splits after failed solves
-  int crossings = 0;                   // solves rejected because a body passed through another
-  int broad_phase_additions = 0;       // pairs added by the end-of-step check
+  // The run's totals of the counters with StepCounter::run_total (step_report.h: cold_restarts, end_frame_retries,
+  // proximal_solves, smoothed_solves, ipopt_solves, substeps, crossings, broad_phase_additions); the others stay 0.
+  StepReport totals;
   int max_pairs_in_ncp = 0;
   int max_iterations = 0;
   double max_residual = 0.0;

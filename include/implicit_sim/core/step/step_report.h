@@ -1,6 +1,7 @@
 // What a step did: its status, the rungs of the retry ladder it climbed, its residuals and its faults.
 #pragma once
 
+#include <array>
 #include <string>
 
 namespace implicit_sim {
@@ -44,5 +45,25 @@ struct StepReport {
   StepFault fault = StepFault::kNone;
   std::string fault_detail;     // which pair overlaps or which body diverged, with the numbers (empty without fault)
 };
+
+// The counters of a StepReport, one row each (as options.h's table is for the options): how the islands of a step
+// merge them (MergeIslandReport), whether a run totals them into summary.json (io/run_output.h, in this order), and
+// their names in the Python bindings. A new counter is a field above and a row here.
+enum class CounterMerge {
+  kSum,   // summed over the islands of a step
+  kStep,  // set by the step itself (not per island)
+};
+struct StepCounter {
+  const char* name;  // the StepReport field, e.g. "cold_restarts"
+  int StepReport::*field;
+  CounterMerge merge;
+  bool run_total;    // summed over a run into the runner's summary.json
+};
+constexpr int kNumStepCounters = 15;
+const std::array<StepCounter, kNumStepCounters>& StepCounterTable();
+
+// Adds an island's report to the step's: its counters by their rows, the residuals take the largest, converged only if
+// both are, the first fault wins.
+void MergeIslandReport(const StepReport& island, StepReport* step);
 
 }  // namespace implicit_sim
