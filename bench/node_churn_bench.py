@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Step time of implicit_sim_node before and during subscriber churn (issue 7, item 7), as JSON lines on stdout.
+"""Step time of implicit_sim_node before and during subscriber churn, as JSON lines on stdout.
 
 Starts a private ROS master and the node (P3 by default, as fast as possible), records the core's wall time per step
 from ~step_stats for --seconds (baseline), then again while 50 subscribe/unsubscribe cycles run on every topic the

@@ -12,7 +12,7 @@ from conftest import scene
 
 
 @pytest.mark.parametrize("name, duration, scheme", [
-    ("p3_sphere_on_two_spheres.urdf", "5", "rattle"),  # the case: the whole 5 s of P3
+    ("p3_sphere_on_two_spheres.urdf", "5", "rattle"),  # the whole 5 s of P3
     ("p3_sphere_on_two_spheres.urdf", "1", "paper"),
     ("gripper_lift.urdf", "0.5", "rattle"),  # joints
     ("cube_drop.urdf", "1", "rattle"),
