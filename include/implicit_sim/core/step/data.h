@@ -73,6 +73,8 @@ class Data {
   static constexpr int kAllPairsLimit = 16;
   explicit Data(const Model& model, PairSelection selection = PairSelection::kAuto);
   ~Data();
+  Data(const Data&) = delete;  // its kinematics and islands refer to its own layout and drives
+  Data& operator=(const Data&) = delete;
   // Whether this Data was built from `model` (the very object: the step problem and the broad phase refer to it).
   bool BelongsTo(const Model& model) const { return &model == model_; }
   // Lays the problem and the solution vectors out for `pairs` (model pair indices, ascending), carrying z_old over
