@@ -1,5 +1,5 @@
 // The node's publishing side: /clock, /tf, /tf_static, /joint_states, ~body_states, ~contacts, ~markers,
-// ~step_stats and /diagnostics, one function per topic. The messages are built by ros_conversions.
+// ~step_stats, one function per topic (/diagnostics: node_diagnostics.h). The messages are built by ros_conversions.
 #include "implicit_sim/ros/sim_node.h"  // first: its generated service type Step precedes the core's function Step
 
 #include <algorithm>
@@ -199,38 +199,6 @@ void SimNode::PublishContactMarkers(const Snapshot& snapshot, PublishMemory* mem
   AppendDragArrows(snapshot, memory->shown_drag_arrows, live.contact_marker_size, &msg);
   memory->shown_drag_arrows = static_cast<int>(snapshot.drag_arrows.size());
   if (!msg.markers.empty()) markers_pub_.publish(msg);
-}
-
-void SimNode::UpdateDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status) {
-  std::lock_guard<std::mutex> lock(diag_mutex_);
-  DiagnosticCounters& d = diag_;
-  if (d.fault_holds) {  // until ~unpause or ~reset: the simulation stays halted by the fault
-    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "step refused, simulation paused: " + d.last_failure);
-  } else if (d.failed > 0) {
-    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "step refused, bodies reset: " + d.last_failure);
-  } else if (d.nonconverged > 0) {
-    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "some steps did not converge");
-  } else {
-    status.summary(diagnostic_msgs::DiagnosticStatus::OK, d.paused ? "paused" : "running");
-  }
-  status.add("sim_time_s", d.sim_time);
-  status.add("steps_since_last_report", d.steps);
-  status.add("nonconverged_steps_since_last_report", d.nonconverged);
-  status.add("failed_steps_since_last_report", d.failed);
-  status.add("received_wrench_commands", d.received_wrench_commands);
-  status.add("dropped_wrench_commands", d.dropped_wrench_commands);
-  status.add("received_joint_effort_commands", d.received_joint_commands);
-  status.add("dropped_joint_effort_commands", d.dropped_joint_commands);
-  status.add("received_drive_commands", d.received_drive_commands);
-  status.add("dropped_drive_commands", d.dropped_drive_commands);
-  for (StepFault fault : {StepFault::kNotConverged, StepFault::kNoFiniteSolution, StepFault::kInitialOverlap,
-                          StepFault::kDiverged, StepFault::kCrossing}) {
-    status.add(std::string("faults_") + StepFaultName(fault), d.faults[static_cast<int>(fault)]);
-  }
-  status.add("real_time_factor", d.rtf);
-  status.add("last_iterations", d.last_iterations);
-  status.add("last_residual", d.last_residual);
-  d.steps = d.nonconverged = d.failed = 0;
 }
 
 }  // namespace implicit_sim

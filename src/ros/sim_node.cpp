@@ -48,22 +48,19 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
       params_(NodeParams::Read(pnh)),
       options_(params_.options),
       live_(params_.live),
-      live_options_(params_.options),
-      diagnostics_(nh, pnh) {
+      live_options_(params_.options) {
   world_ = BuildWorld(ReadNodeScene(nh, params_));
   OpenJournals();
   PublishRobotDescription(world_->urdf);
   const Model& model = *world_->model;
   paused_ = params_.paused;
-  diag_.paused = paused_;
+  diagnostics_ = std::make_unique<NodeDiagnostics>(nh, pnh, "implicit_sim " + model.scene_name, paused_);
   SaveSnapshot();
   AdvertiseTopics();
   AdvertiseServices();
   PublishStaticTf(model);
   SetUpReconfigure();
   SetUpDragMarkers(model, world_->state);
-  diagnostics_.setHardwareID("implicit_sim " + model.scene_name);
-  diagnostics_.add("solver", this, &SimNode::UpdateDiagnostics);
   ROS_INFO("implicit_sim: scene '%s', %d moving bodies, %zu contact pairs, h = %g s, %s", model.scene_name.c_str(),
            model.num_moving(), model.pairs.size(), options_.h, paused_ ? "paused" : "running");
 }
@@ -211,7 +208,7 @@ void SimNode::StepOnce(double rtf) {
     // Step left the last good state in place (it never publishes NaN): warn once, then pause or reset.
     failure = std::string(StepFaultName(report.fault)) + (report.fault_detail.empty() ? "" : ": ") +
               report.fault_detail;
-    if (params_.on_fault == "reset" && stepped_) {
+    if (params_.on_fault == OnFault::kReset && stepped_) {
       ROS_WARN("implicit_sim: step refused (%s); bodies reset to their initial state", failure.c_str());
       ResetWorld();
     } else {
@@ -219,22 +216,7 @@ void SimNode::StepOnce(double rtf) {
       ROS_ERROR("implicit_sim: step refused (%s); the simulation is paused", failure.c_str());
     }
   }
-  {
-    std::lock_guard<std::mutex> lock(diag_mutex_);
-    ++diag_.steps;
-    ++diag_.faults[static_cast<int>(report.fault)];
-    if (!report.converged) ++diag_.nonconverged;
-    if (!report.advanced) {
-      ++diag_.failed;
-      diag_.last_failure = failure;
-      diag_.fault_holds = paused_;
-    }
-    diag_.paused = paused_;
-    diag_.sim_time = SimTime();
-    diag_.rtf = rtf;
-    diag_.last_iterations = report.iterations;
-    diag_.last_residual = report.residual;
-  }
+  diagnostics_->CountStep(report, failure, paused_, SimTime(), rtf);
   if (!report.advanced) {
     std::lock_guard<std::mutex> lock(mailbox_mutex_);
     job_.sim_time = SimTime();
@@ -249,12 +231,7 @@ void SimNode::StepOnce(double rtf) {
 void SimNode::RefuseReplayStep(const std::string& refusal) {
   paused_ = true;
   ROS_ERROR("implicit_sim: replay stops: %s; the simulation is paused", refusal.c_str());
-  {
-    std::lock_guard<std::mutex> lock(diag_mutex_);
-    diag_.paused = true;
-    diag_.fault_holds = true;
-    diag_.last_failure = refusal;
-  }
+  diagnostics_->HoldFault(refusal);
   std::lock_guard<std::mutex> lock(mailbox_mutex_);
   if (job_.active) FinishJobLocked(false, "stopped after " + std::to_string(job_.done) + " steps: " + refusal);
 }
@@ -415,7 +392,7 @@ void SimNode::DiagnosticsLoop() {
   std::unique_lock<std::mutex> lock(stop_mutex_);
   while (!stop_cv_.wait_for(lock, std::chrono::seconds(1), [this] { return stopping_.load(); })) {
     lock.unlock();
-    diagnostics_.force_update();
+    diagnostics_->Publish();
     lock.lock();
   }
 }

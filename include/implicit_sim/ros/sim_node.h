@@ -21,7 +21,6 @@
 #include <vector>
 
 #include <actionlib/server/simple_action_server.h>
-#include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <Eigen/Core>
 #include <interactive_markers/interactive_marker_server.h>
@@ -49,6 +48,7 @@
 #include "implicit_sim/core/model/urdf_loader.h"
 #include "implicit_sim/core/step/time_stepper.h"
 #include "implicit_sim/ros/input_journal.h"
+#include "implicit_sim/ros/node_diagnostics.h"
 #include "implicit_sim/ros/node_params.h"
 
 namespace implicit_sim {
@@ -149,19 +149,19 @@ class SimNode {
     double sim_time = 0.0;  // s, after the last step done
     std::string message;
   };
-  // Counters for /diagnostics, written by the physics thread and the command callbacks. Guarded by diag_mutex_.
-  struct DiagnosticCounters {
-    long steps = 0, nonconverged = 0, failed = 0;  // since the last report
-    long received_wrench_commands = 0, dropped_wrench_commands = 0;
-    long received_joint_commands = 0, dropped_joint_commands = 0;
-    long received_drive_commands = 0, dropped_drive_commands = 0;
-    long faults[6] = {0, 0, 0, 0, 0, 0};  // refused or non-converged steps since startup, by StepFault
-    bool paused = false;
-    bool fault_holds = false;  // a refused step paused the simulation; cleared by ~unpause, ~reset
-    std::string last_failure;
-    double sim_time = 0.0, rtf = 0.0, last_residual = 0.0;
-    long last_iterations = 0;
+  // A command topic: its name (for warnings), its journal kind, its /diagnostics counter and what applies a message
+  // on the physics thread (false with *error when the message is refused). One each, defined in node_services.cpp.
+  template <typename Message>
+  struct CommandInput {
+    const char* topic;
+    JournalInput journal;
+    CommandTopic counter;
+    bool (SimNode::*apply)(const Message& msg, std::string* error);
   };
+  static const CommandInput<implicit_sim::BodyWrench> kWrenchInput;
+  static const CommandInput<sensor_msgs::JointState> kJointEffortInput;
+  static const CommandInput<implicit_sim::JointCommand> kJointCommandInput;
+  static const CommandInput<trajectory_msgs::JointTrajectory> kJointTrajectoryInput;
   struct Command {
     std::function<void()> run;
     bool done = false;
@@ -212,13 +212,10 @@ class SimNode {
   void SetUpReconfigure();
   void OnReconfigure(SimNodeConfig& next);
   // node_drives.cpp: joint drives.
-  void OnJointCommand(const implicit_sim::JointCommand::ConstPtr& msg);
-  void OnJointTrajectory(const trajectory_msgs::JointTrajectory::ConstPtr& msg);
   bool ApplyJointCommand(const implicit_sim::JointCommand& msg, std::string* error);          // physics thread
   bool StartTrajectory(const trajectory_msgs::JointTrajectory& msg, std::string* error);      // physics thread
   void StopTrajectoryOf(int joint);
   void UpdateTrajectoryDrives();  // the trajectories' targets for the step starting now
-  void CountDriveCommand(bool ok, const char* topic, const std::string& error);
   // node_drag.cpp: interactive markers that push bodies.
   void SetUpDragMarkers(const Model& model, const State& state);
   void OnDrag(const visualization_msgs::InteractiveMarkerFeedbackConstPtr& feedback);
@@ -241,7 +238,6 @@ class SimNode {
   void SendJointStates(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to);
   void SendMarkers(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to);
   void AppendDragArrows(const Snapshot& snapshot, int shown, double size, visualization_msgs::MarkerArray* msg) const;
-  void UpdateDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status);
   // node_services.cpp: services and command topics (run on the physics thread through the mailbox).
   void AdvertiseServices();
   int FindBodyOrFail(const std::string& name, bool must_move, std::string* error) const;
@@ -252,11 +248,26 @@ class SimNode {
   bool OnGetBodyState(implicit_sim::GetBodyState::Request& req, implicit_sim::GetBodyState::Response& res);
   bool OnSetBodyState(implicit_sim::SetBodyState::Request& req, implicit_sim::SetBodyState::Response& res);
   bool OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req, implicit_sim::ApplyBodyWrench::Response& res);
-  void OnWrenchCommand(const implicit_sim::BodyWrench::ConstPtr& msg);
-  void ApplyWrenchCommand(const implicit_sim::BodyWrench& msg);  // physics thread
-  void ApplyJointEffortCommand(const sensor_msgs::JointState& msg);  // physics thread
-  void ApplyJointCommandCounted(const implicit_sim::JointCommand& msg);  // physics thread
-  void StartTrajectoryCounted(const trajectory_msgs::JointTrajectory& msg);  // physics thread
+  bool ApplyWrenchCommand(const implicit_sim::BodyWrench& msg, std::string* error);  // physics thread
+  bool ApplyJointEfforts(const sensor_msgs::JointState& msg, std::string* error);    // physics thread
+  // Subscribes to a command topic: each message is posted to the physics thread, journaled and applied (ApplyCommand).
+  template <typename Message>
+  ros::Subscriber SubscribeCommand(const std::string& name, uint32_t queue, const CommandInput<Message>& input) {
+    return pnh_.subscribe<Message>(
+        name, queue, boost::function<void(const typename Message::ConstPtr&)>([this, &input](const auto& msg) {
+          PostBetweenSteps([this, &input, msg] {
+            Journal(input.journal, *msg);
+            ApplyCommand(*msg, input);
+          });
+        }));
+  }
+  // A command topic's message on the physics thread (received or replayed): applied and counted in /diagnostics.
+  template <typename Message>
+  void ApplyCommand(const Message& msg, const CommandInput<Message>& input) {
+    std::string error;
+    const bool accepted = (this->*input.apply)(msg, &error);
+    diagnostics_->CountCommand(input.counter, input.topic, accepted, error);
+  }
   // The input journal (physics thread): record a command topic's message, or mark an input it cannot replay.
   template <typename Message>
   void Journal(JournalInput kind, const Message& msg) {
@@ -274,7 +285,6 @@ class SimNode {
   void WaitForPace(std::chrono::steady_clock::time_point until);  // physics thread, between paced steps
   bool SetJointEfforts(const std::vector<std::string>& names, const std::vector<double>& efforts,
                        std::string* error);  // all or nothing; physics thread
-  void OnJointEffortCommand(const sensor_msgs::JointState::ConstPtr& msg);
   bool OnSetJointEfforts(implicit_sim::SetJointEfforts::Request& req, implicit_sim::SetJointEfforts::Response& res);
 
   ros::NodeHandle nh_, pnh_;
@@ -306,8 +316,7 @@ class SimNode {
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<SimNodeConfig>> reconfigure_;
 
-  std::mutex diag_mutex_;
-  DiagnosticCounters diag_;
+  std::unique_ptr<NodeDiagnostics> diagnostics_;  // /diagnostics: its own lock, read by the diagnostics thread
 
   std::unique_ptr<interactive_markers::InteractiveMarkerServer> drag_server_;
   std::mutex drag_mutex_;
@@ -330,7 +339,6 @@ class SimNode {
   std::vector<ros::ServiceServer> services_;
   ros::Subscriber wrench_sub_, joint_effort_sub_, joint_command_sub_, joint_trajectory_sub_;
   tf2_ros::StaticTransformBroadcaster static_broadcaster_;
-  diagnostic_updater::Updater diagnostics_;
   std::unique_ptr<actionlib::SimpleActionServer<implicit_sim::RunStepsAction>> run_steps_server_;
   std::thread physics_thread_, publish_thread_, diagnostics_thread_;
 };
