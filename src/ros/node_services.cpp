@@ -119,7 +119,7 @@ bool SimNode::OnClearWrenches(std_srvs::Trigger::Request&, std_srvs::Trigger::Re
 }
 
 bool SimNode::OnGetBodyState(implicit_sim::GetBodyState::Request& req, implicit_sim::GetBodyState::Response& res) {
-  const std::shared_ptr<const Snapshot> snapshot = Latest();  // never waits for a step
+  const std::shared_ptr<const NodeSnapshot> snapshot = publisher_->Latest();  // never waits for a step
   const Model& model = *snapshot->model;
   const int b = model.FindBody(req.body);
   res.success = b >= 0;

@@ -23,14 +23,9 @@ using WallClock = std::chrono::steady_clock;
 // How long shutdown waits for a step in progress (a step of a large pile can take seconds) before the node exits
 // without it; roslaunch escalates SIGINT to SIGTERM only after 15 s.
 constexpr double kShutdownGraceS = 2.0;
-// /clock from the physics thread: at most ~clock_rate messages per second of simulation time and at most this many
-// per second of wall time (as fast as possible, sim time runs hundreds of times faster than the wall).
-constexpr double kMaxClockWallRate = 1000.0;  // Hz
 // At real time, a simulation that fell behind by more than this (s of wall time; a slow step) goes on at the real-time
 // pace from where it is instead of catching up in a burst faster than real time.
 constexpr double kMaxPaceLagS = 0.1;
-
-double WallSeconds() { return std::chrono::duration<double>(WallClock::now().time_since_epoch()).count(); }
 
 }  // namespace
 
@@ -55,10 +50,13 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   const Model& model = *world_->model;
   paused_ = params_.paused;
   diagnostics_ = std::make_unique<NodeDiagnostics>(nh, pnh, "implicit_sim " + model.scene_name, paused_);
+  publisher_ = std::make_unique<NodePublisher>(
+      nh, pnh, params_, [this] { return Live(); },
+      [this](const NodeSnapshot& snapshot) { SetUpDragMarkers(*snapshot.model, snapshot.state); },
+      [this](const NodeSnapshot& snapshot) { UpdateDragMarkers(snapshot); });
   SaveSnapshot();
-  AdvertiseTopics();
   AdvertiseServices();
-  PublishStaticTf(model);
+  publisher_->PublishStaticTf(model);
   SetUpReconfigure();
   SetUpDragMarkers(model, world_->state);
   ROS_INFO("implicit_sim: scene '%s', %d moving bodies, %zu contact pairs, h = %g s, %s", model.scene_name.c_str(),
@@ -74,7 +72,7 @@ SimNode::~SimNode() {
 void SimNode::Run() {
   ros::AsyncSpinner spinner(4);  // services wait for the physics thread: several may wait at once
   spinner.start();
-  PublishClock(SimTime());
+  publisher_->PublishClock(SimTime());
   StartThread(&physics_thread_, &SimNode::PhysicsLoop);
   StartThread(&publish_thread_, &SimNode::PublishLoop);
   StartThread(&diagnostics_thread_, &SimNode::DiagnosticsLoop);
@@ -223,8 +221,8 @@ void SimNode::StepOnce(double rtf) {
     if (job_.active) FinishJobLocked(false, "stopped after " + std::to_string(job_.done) + " steps: " + failure);
   }
   SaveSnapshot();
-  PublishClockThrottled(SimTime(), !report.advanced);
-  PublishStepStats(report, SimTime(), step_count_, rtf);
+  publisher_->PublishClockThrottled(SimTime(), !report.advanced);
+  publisher_->PublishStepStats(report, SimTime(), step_count_, rtf);
 }
 
 // The replay cannot go on: pause (and end a ~step or ~run_steps job) before the step, which is not taken.
@@ -261,7 +259,7 @@ void SimNode::ResetWorld() {
 
 void SimNode::SaveSnapshot() {
   const World& w = *world_;
-  auto snapshot = std::make_shared<Snapshot>();
+  auto snapshot = std::make_shared<NodeSnapshot>();
   snapshot->model = w.model;
   snapshot->state = w.state;
   snapshot->contacts = w.data->contacts;
@@ -273,25 +271,7 @@ void SimNode::SaveSnapshot() {
   for (const DragSpring& drag : w.drags) {
     snapshot->drag_arrows.emplace_back(w.state.X_WL(*w.model, drag.body) * drag.p_LG, drag.target_W);
   }
-  std::lock_guard<std::mutex> lock(latest_mutex_);
-  latest_ = std::move(snapshot);
-}
-
-std::shared_ptr<const SimNode::Snapshot> SimNode::Latest() const {
-  std::lock_guard<std::mutex> lock(latest_mutex_);
-  return latest_;
-}
-
-void SimNode::PublishClockThrottled(double sim_time, bool force) {
-  const double wall = WallSeconds();
-  {
-    std::lock_guard<std::mutex> lock(clock_mutex_);
-    const bool due = sim_time >= last_clock_ + 1.0 / Live().clock_rate - 1e-12 &&
-                     wall >= last_clock_wall_ + 1.0 / kMaxClockWallRate;
-    if (!force && !due) return;
-    last_clock_wall_ = wall;
-  }
-  PublishClock(sim_time);
+  publisher_->Store(std::move(snapshot));
 }
 
 void SimNode::PhysicsLoop() {
@@ -360,25 +340,11 @@ void SimNode::WaitForPace(std::chrono::steady_clock::time_point until) {
 // /clock, /tf and the topics at ~publish_rate (wall time) from the latest snapshot; never waits for a step. The
 // per-state topics are sent when the snapshot changed, so a paused simulation sends nothing again but /clock.
 void SimNode::PublishLoop() {
-  PublishMemory memory;
   WallClock::time_point next = WallClock::now();
   while (!stopping_) {
     const auto period =
         std::chrono::duration_cast<WallClock::duration>(std::chrono::duration<double>(1.0 / Live().publish_rate));
-    const std::shared_ptr<const Snapshot> latest = Latest();
-    const Snapshot& snapshot = *latest;
-    if (memory.model != snapshot.model) {  // a new world: its shapes and static frames, stale contacts deleted
-      if (memory.model) AnnounceNewWorld(snapshot, &memory);
-      memory.model = snapshot.model;
-      memory.on_tf.assign(snapshot.model->bodies.size(), 1);  // jointed links: to robot_state_publisher if asked
-      for (const Joint& joint : snapshot.model->joints) memory.on_tf[joint.child] = params_.publish_joint_link_tf;
-    }
-    PublishClock(snapshot.sim_time);  // every cycle, even when time has not moved (the same time again is allowed)
-    if (snapshot.version != memory.last_version) {
-      memory.last_version = snapshot.version;
-      PublishStateTopics(snapshot, &memory);
-    }
-    UpdateDragMarkers(snapshot, &memory);
+    publisher_->Cycle();
     next += period;
     const WallClock::time_point now = WallClock::now();
     if (next < now) next = now;  // a late cycle is not made up with a burst

@@ -5,8 +5,11 @@
 // to it through a mailbox: a service posts a command and waits for the physics thread to run it between two steps
 // (so it answers within one step, never after a whole ~step job), a command topic posts without waiting, and the
 // publish and diagnostics threads read only the snapshot the physics thread saves after every change. No lock is
-// ever held across a step. By concern: sim_node.cpp (threads, mailbox, stepping), node_jobs.cpp (the ~step service
-// and the ~run_steps action), node_params.cpp, node_services.cpp, node_publishers.cpp.
+// ever held across a step. Parts with locks of their own: NodePublisher (node_publisher.h: the topics, from
+// snapshots) and NodeDiagnostics (node_diagnostics.h: the counters of /diagnostics). By concern: sim_node.cpp
+// (threads, mailbox, stepping), node_jobs.cpp (the ~step service and the ~run_steps action), node_services.cpp
+// (services, and the command topics' one path: SubscribeCommand, ApplyCommand), node_world.cpp, node_drives.cpp,
+// node_drag.cpp, node_reconfigure.cpp, node_journal.cpp.
 #pragma once
 
 #include <atomic>
@@ -49,6 +52,7 @@
 #include "implicit_sim/core/step/time_stepper.h"
 #include "implicit_sim/ros/input_journal.h"
 #include "implicit_sim/ros/node_diagnostics.h"
+#include "implicit_sim/ros/node_publisher.h"
 #include "implicit_sim/ros/node_params.h"
 
 namespace implicit_sim {
@@ -118,30 +122,6 @@ class SimNode {
     explicit World(std::shared_ptr<const Model> loaded);
   };
 
-  // The latest state, saved by the physics thread after every change; the publish thread and the read-only services
-  // use only this. `version` grows with every saved snapshot.
-  struct Snapshot {
-    std::shared_ptr<const Model> model;
-    State state;
-    std::vector<ContactResult> contacts;
-    Eigen::VectorXd efforts;  // per model joint: the commanded effort (N m or N)
-    std::vector<double> drive_efforts;  // per model joint: the drive's effort over the last step (N m or N)
-    double sim_time = 0.0;    // s
-    uint64_t version = 0;
-    bool stepped = false;     // a step has run since startup or the last reset (contact results exist)
-    std::vector<std::pair<Vec3, Vec3>> drag_arrows;  // per drag: the grabbed point and the target (m, world)
-  };
-  // What the publish thread keeps from one cycle to the next (touched by it only).
-  struct PublishMemory {
-    std::shared_ptr<const Model> model;      // the model the shapes below belong to
-    std::vector<char> on_tf;                 // per body: whether /tf carries its link
-    std::vector<int> shown_pairs, active_pairs;  // pairs with contact markers: last published, current
-    double last_tf_time = -1.0;              // s, simulation time of the last /tf
-    uint64_t last_version = 0;               // snapshot version last published
-    int shown_drag_arrows = 0;               // drag arrows last published (ids 0 ... n-1)
-    double next_drag_update = 0.0;           // s of wall time: the next pose update of the interactive markers
-    uint64_t drag_version = 0;               // snapshot version the interactive markers show
-  };
   // A ~step or ~run_steps request: steps run by the physics thread while paused. Guarded by mailbox_mutex_.
   struct StepJob {
     bool active = false, cancel = false, finished = false, success = false;
@@ -192,9 +172,7 @@ class SimNode {
   void StepOnce(double rtf);             // one step with the active wrenches
   void ResetWorld();                     // bodies back to the initial state, warm start and wrenches cleared
   void ComputeWrenches();                // fills wrench_W for the step starting now
-  void SaveSnapshot();                   // the current state as the latest snapshot
-  std::shared_ptr<const Snapshot> Latest() const;
-  void PublishClockThrottled(double sim_time, bool force);
+  void SaveSnapshot();                   // the current state as the latest snapshot (NodePublisher::Store)
   void PublishLoop();
   void DiagnosticsLoop();
   // Sets stopping_, wakes every thread and joins them once all have ended within grace_s (s); false,
@@ -220,24 +198,7 @@ class SimNode {
   void SetUpDragMarkers(const Model& model, const State& state);
   void OnDrag(const visualization_msgs::InteractiveMarkerFeedbackConstPtr& feedback);
   void AddDragWrenches();  // physics thread, into wrench_W
-  void UpdateDragMarkers(const Snapshot& snapshot, PublishMemory* memory);
-  // node_publishers.cpp: one function per topic.
-  void AdvertiseTopics();
-  void PublishClock(double sim_time);
-  void PublishStepStats(const StepReport& report, double sim_time, uint64_t step, double rtf);
-  void PublishStaticTf(const Model& model);
-  void PublishTf(const Snapshot& snapshot, const ros::Time& stamp, PublishMemory* memory);
-  void PublishStateTopics(const Snapshot& snapshot, PublishMemory* memory);  // after a change of the state
-  void AnnounceNewWorld(const Snapshot& snapshot, PublishMemory* memory);    // static tf, shapes, drag markers
-  void PublishContactMarkers(const Snapshot& snapshot, PublishMemory* memory);
-  sensor_msgs::JointState JointStatesMsg(const Snapshot& snapshot) const;
-  implicit_sim::Contacts ContactsMsg(const Snapshot& snapshot) const;
-  // The current message of a per-state topic to one new subscriber.
-  void SendContacts(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to);
-  void SendBodyStates(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to);
-  void SendJointStates(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to);
-  void SendMarkers(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to);
-  void AppendDragArrows(const Snapshot& snapshot, int shown, double size, visualization_msgs::MarkerArray* msg) const;
+  void UpdateDragMarkers(const NodeSnapshot& snapshot);  // publish thread
   // node_services.cpp: services and command topics (run on the physics thread through the mailbox).
   void AdvertiseServices();
   int FindBodyOrFail(const std::string& name, bool must_move, std::string* error) const;
@@ -322,12 +283,10 @@ class SimNode {
   std::mutex drag_mutex_;
   std::set<std::string> dragged_;  // bodies being dragged (their marker is the user's); guarded by drag_mutex_
 
-  std::mutex clock_mutex_;
-  double last_clock_ = -1.0;                 // s of sim time, the latest /clock
-  double last_clock_wall_ = -1.0;            // s of wall time (steady clock) of the latest throttled /clock
+  double next_drag_update_ = 0.0;  // publish thread: s of wall time, the next pose update of the interactive markers
+  uint64_t drag_version_ = 0;      // publish thread: the snapshot version the interactive markers show
 
-  mutable std::mutex latest_mutex_;
-  std::shared_ptr<const Snapshot> latest_;  // guarded by latest_mutex_
+  std::unique_ptr<NodePublisher> publisher_;  // the topics, from snapshots; its own locks
 
   // Every thread ends: the physics thread after the step in progress, the others at once.
   std::atomic<bool> stopping_{false};
@@ -335,10 +294,8 @@ class SimNode {
   std::condition_variable stop_cv_;    // wakes the publish and diagnostics threads' waits, and StopThreads
   int threads_started_ = 0, threads_ended_ = 0;  // guarded by stop_mutex_
 
-  ros::Publisher clock_pub_, tf_pub_, contacts_pub_, markers_pub_, stats_pub_, body_states_pub_, joint_states_pub_;
   std::vector<ros::ServiceServer> services_;
   ros::Subscriber wrench_sub_, joint_effort_sub_, joint_command_sub_, joint_trajectory_sub_;
-  tf2_ros::StaticTransformBroadcaster static_broadcaster_;
   std::unique_ptr<actionlib::SimpleActionServer<implicit_sim::RunStepsAction>> run_steps_server_;
   std::thread physics_thread_, publish_thread_, diagnostics_thread_;
 };
