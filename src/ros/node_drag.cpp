@@ -107,12 +107,12 @@ void SimNode::AddDragWrenches() {
   }
 }
 
-void SimNode::UpdateDragMarkers(const Snapshot& snapshot, PublishMemory* memory) {
-  if (!drag_server_ || snapshot.version == memory->drag_version) return;  // nothing moved: nothing to send
+void SimNode::UpdateDragMarkers(const NodeSnapshot& snapshot) {
+  if (!drag_server_ || snapshot.version == drag_version_) return;  // nothing moved: nothing to send
   const double now = ros::WallTime::now().toSec();
-  if (now < memory->next_drag_update) return;
-  memory->next_drag_update = now + kMarkerUpdatePeriodS;
-  memory->drag_version = snapshot.version;
+  if (now < next_drag_update_) return;
+  next_drag_update_ = now + kMarkerUpdatePeriodS;
+  drag_version_ = snapshot.version;
   const Model& model = *snapshot.model;
   std::set<std::string> dragged;
   {

@@ -49,31 +49,6 @@ void Hermite(double p0, double v0, double p1, double v1, double T, double s, dou
 
 }  // namespace
 
-void SimNode::CountDriveCommand(bool ok, const char* topic, const std::string& error) {
-  long dropped = 0;
-  {
-    std::lock_guard<std::mutex> lock(diag_mutex_);
-    ++diag_.received_drive_commands;
-    if (!ok) dropped = ++diag_.dropped_drive_commands;
-  }
-  if (!ok) {
-    ROS_WARN_THROTTLE(1.0, "implicit_sim: dropped %s: %s (%ld dropped so far)", topic, error.c_str(), dropped);
-  }
-}
-
-void SimNode::OnJointCommand(const implicit_sim::JointCommand::ConstPtr& msg) {
-  PostBetweenSteps([this, msg] {
-    Journal(JournalInput::kJointCommand, *msg);
-    ApplyJointCommandCounted(*msg);
-  });
-}
-
-void SimNode::ApplyJointCommandCounted(const implicit_sim::JointCommand& msg) {
-  std::string error;
-  const bool ok = ApplyJointCommand(msg, &error);
-  CountDriveCommand(ok, "~joint_command", error);
-}
-
 bool SimNode::ApplyJointCommand(const implicit_sim::JointCommand& msg, std::string* error) {
   const Model& model = *world_->model;
   const size_t n = msg.name.size();
@@ -107,19 +82,6 @@ void SimNode::StopTrajectoryOf(int joint) {
       if (j == joint) j = -1;  // that joint no longer follows it
     }
   }
-}
-
-void SimNode::OnJointTrajectory(const trajectory_msgs::JointTrajectory::ConstPtr& msg) {
-  PostBetweenSteps([this, msg] {
-    Journal(JournalInput::kJointTrajectory, *msg);
-    StartTrajectoryCounted(*msg);
-  });
-}
-
-void SimNode::StartTrajectoryCounted(const trajectory_msgs::JointTrajectory& msg) {
-  std::string error;
-  const bool ok = StartTrajectory(msg, &error);
-  CountDriveCommand(ok, "~joint_trajectory", error);
 }
 
 bool SimNode::StartTrajectory(const trajectory_msgs::JointTrajectory& msg, std::string* error) {

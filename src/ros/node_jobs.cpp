@@ -77,7 +77,7 @@ bool SimNode::OnStep(implicit_sim::Step::Request& req, implicit_sim::Step::Respo
   res.sim_time = job_.sim_time;
   job_.finished = false;
   lock.unlock();
-  PublishClock(res.sim_time);  // the final time at once, whatever the clock throttle sent
+  publisher_->PublishClock(res.sim_time);  // the final time at once, whatever the clock throttle sent
   return true;
 }
 
@@ -118,7 +118,7 @@ void SimNode::OnRunStepsGoal(const implicit_sim::RunStepsGoalConstPtr& goal) {
   if (!job_.finished && job_.active) job_.active = false;
   job_.finished = false;
   lock.unlock();
-  PublishClock(result.sim_time);
+  publisher_->PublishClock(result.sim_time);
   if (cancel_sent) {
     run_steps_server_->setPreempted(result, result.message);
   } else if (result.success) {

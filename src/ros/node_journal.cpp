@@ -31,16 +31,16 @@ bool SimNode::ReplayJournalInputs(std::string* refusal) {
 bool SimNode::ApplyJournalRecord(const JournalRecord& record, std::string* refusal) {
   switch (record.kind) {
     case JournalInput::kWrenchCommand:
-      ApplyWrenchCommand(record.Decode<implicit_sim::BodyWrench>());
+      ApplyCommand(record.Decode<implicit_sim::BodyWrench>(), kWrenchInput);
       return true;
     case JournalInput::kJointCommand:
-      ApplyJointCommandCounted(record.Decode<implicit_sim::JointCommand>());
+      ApplyCommand(record.Decode<implicit_sim::JointCommand>(), kJointCommandInput);
       return true;
     case JournalInput::kJointEffortCommand:
-      ApplyJointEffortCommand(record.Decode<sensor_msgs::JointState>());
+      ApplyCommand(record.Decode<sensor_msgs::JointState>(), kJointEffortInput);
       return true;
     case JournalInput::kJointTrajectory:
-      StartTrajectoryCounted(record.Decode<trajectory_msgs::JointTrajectory>());
+      ApplyCommand(record.Decode<trajectory_msgs::JointTrajectory>(), kJointTrajectoryInput);
       return true;
     case JournalInput::kUnreplayable:
       break;

@@ -101,10 +101,11 @@ NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
     if (!error.empty()) throw std::invalid_argument(error);
   }
   p.paused = ReadParam(pnh, "paused", p.paused);
-  p.on_fault = ReadParam(pnh, "on_fault", p.on_fault);
-  if (p.on_fault != "pause" && p.on_fault != "reset") {
-    throw std::invalid_argument("parameter ~on_fault = '" + p.on_fault + "' must be pause or reset");
+  const std::string on_fault = ReadParam<std::string>(pnh, "on_fault", "pause");
+  if (on_fault != "pause" && on_fault != "reset") {
+    throw std::invalid_argument("parameter ~on_fault = '" + on_fault + "' must be pause or reset");
   }
+  p.on_fault = on_fault == "reset" ? OnFault::kReset : OnFault::kPause;
   p.world_frame = ReadParam(pnh, "world_frame", p.world_frame);
   p.publish_joint_link_tf = ReadParam(pnh, "publish_joint_link_tf", p.publish_joint_link_tf);
   p.interactive_markers = ReadParam(pnh, "interactive_markers", p.interactive_markers);

@@ -17,15 +17,27 @@ namespace conv = ros_conversions;
 namespace {
 
 // Sets *error when a commanded force (N) or torque (N m) is non-finite or larger than kMaxCommand.
-void CheckWrenchValues(const Vec3& force, const Vec3& torque, std::string* error) {
+bool CheckWrenchValues(const Vec3& force, const Vec3& torque, std::string* error) {
   if (!force.allFinite() || !torque.allFinite()) {
     *error = "wrench must be finite";
   } else if (force.norm() > kMaxCommand || torque.norm() > kMaxCommand) {
     *error = "wrench too large: |force| and |torque| must be <= 1e9 (N, N m)";
+  } else {
+    return true;
   }
+  return false;
 }
 
 }  // namespace
+
+const SimNode::CommandInput<implicit_sim::BodyWrench> SimNode::kWrenchInput{
+    "~wrench_cmd", JournalInput::kWrenchCommand, CommandTopic::kWrench, &SimNode::ApplyWrenchCommand};
+const SimNode::CommandInput<sensor_msgs::JointState> SimNode::kJointEffortInput{
+    "~joint_effort_cmd", JournalInput::kJointEffortCommand, CommandTopic::kJointEffort, &SimNode::ApplyJointEfforts};
+const SimNode::CommandInput<implicit_sim::JointCommand> SimNode::kJointCommandInput{
+    "~joint_command", JournalInput::kJointCommand, CommandTopic::kJointDrive, &SimNode::ApplyJointCommand};
+const SimNode::CommandInput<trajectory_msgs::JointTrajectory> SimNode::kJointTrajectoryInput{
+    "~joint_trajectory", JournalInput::kJointTrajectory, CommandTopic::kJointDrive, &SimNode::StartTrajectory};
 
 void SimNode::AdvertiseServices() {
   services_.push_back(pnh_.advertiseService("pause", &SimNode::OnPause, this));
@@ -36,14 +48,14 @@ void SimNode::AdvertiseServices() {
   services_.push_back(pnh_.advertiseService("get_body_state", &SimNode::OnGetBodyState, this));
   services_.push_back(pnh_.advertiseService("set_body_state", &SimNode::OnSetBodyState, this));
   services_.push_back(pnh_.advertiseService("apply_body_wrench", &SimNode::OnApplyWrench, this));
-  wrench_sub_ = pnh_.subscribe("wrench_cmd", 100, &SimNode::OnWrenchCommand, this);
+  wrench_sub_ = SubscribeCommand("wrench_cmd", 100, kWrenchInput);
   services_.push_back(pnh_.advertiseService("set_joint_efforts", &SimNode::OnSetJointEfforts, this));
   services_.push_back(pnh_.advertiseService("spawn", &SimNode::OnSpawn, this));
   services_.push_back(pnh_.advertiseService("delete", &SimNode::OnDelete, this));
   services_.push_back(pnh_.advertiseService("load_scene", &SimNode::OnLoadScene, this));
-  joint_effort_sub_ = pnh_.subscribe("joint_effort_cmd", 100, &SimNode::OnJointEffortCommand, this);
-  joint_command_sub_ = pnh_.subscribe("joint_command", 100, &SimNode::OnJointCommand, this);
-  joint_trajectory_sub_ = pnh_.subscribe("joint_trajectory", 10, &SimNode::OnJointTrajectory, this);
+  joint_effort_sub_ = SubscribeCommand("joint_effort_cmd", 100, kJointEffortInput);
+  joint_command_sub_ = SubscribeCommand("joint_command", 100, kJointCommandInput);
+  joint_trajectory_sub_ = SubscribeCommand("joint_trajectory", 10, kJointTrajectoryInput);
   run_steps_server_ = std::make_unique<actionlib::SimpleActionServer<implicit_sim::RunStepsAction>>(
       pnh_, "run_steps", [this](const implicit_sim::RunStepsGoalConstPtr& goal) { OnRunStepsGoal(goal); }, false);
 }
@@ -63,10 +75,7 @@ int SimNode::FindBodyOrFail(const std::string& name, bool must_move, std::string
 bool SimNode::OnPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
   return RunBetweenSteps([&] {
            paused_ = true;
-           {
-             std::lock_guard<std::mutex> lock(diag_mutex_);
-             diag_.paused = true;
-           }
+           diagnostics_->SetPaused(true);
            res.success = true;
            res.message = "paused at t = " + FormatNumber(SimTime()) + " s";
          }) || ShuttingDownAnswer(res);
@@ -82,12 +91,7 @@ bool SimNode::OnUnpause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
            }
            paused_ = false;
            restart_pacing_ = true;
-           {
-             std::lock_guard<std::mutex> diag_lock(diag_mutex_);
-             diag_.paused = false;
-             diag_.fault_holds = false;
-             diag_.last_failure.clear();
-           }
+           diagnostics_->SetPaused(false);
            res.success = true;
            res.message = "running from t = " + FormatNumber(SimTime()) + " s";
          }) || ShuttingDownAnswer(res);
@@ -97,11 +101,7 @@ bool SimNode::OnReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& 
   return RunBetweenSteps([&] {
            ResetWorld();
            JournalUnreplayable("~reset");
-           {
-             std::lock_guard<std::mutex> lock(diag_mutex_);
-             diag_.fault_holds = false;
-             diag_.last_failure.clear();
-           }
+           diagnostics_->ClearFault();
            res.success = true;
            res.message = "bodies back to their initial state at t = " + FormatNumber(SimTime()) + " s";
          }) || ShuttingDownAnswer(res);
@@ -119,7 +119,7 @@ bool SimNode::OnClearWrenches(std_srvs::Trigger::Request&, std_srvs::Trigger::Re
 }
 
 bool SimNode::OnGetBodyState(implicit_sim::GetBodyState::Request& req, implicit_sim::GetBodyState::Response& res) {
-  const std::shared_ptr<const Snapshot> snapshot = Latest();  // never waits for a step
+  const std::shared_ptr<const NodeSnapshot> snapshot = publisher_->Latest();  // never waits for a step
   const Model& model = *snapshot->model;
   const int b = model.FindBody(req.body);
   res.success = b >= 0;
@@ -160,7 +160,7 @@ bool SimNode::OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req,
                (!w.point.allFinite() || !std::isfinite(req.start_time) || !std::isfinite(req.duration))) {
              error = "reference_point, start_time and duration must be finite";
            }
-           if (error.empty()) CheckWrenchValues(w.force, w.torque, &error);
+           if (error.empty()) CheckWrenchValues(w.force, w.torque, &error);  // sets error when refused
            if (error.empty() && req.duration == 0.0) error = "duration must be > 0 s, or < 0 for until cleared";
            if (!error.empty()) {
              res.message = error;
@@ -174,31 +174,14 @@ bool SimNode::OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req,
          }) || ShuttingDownAnswer(res);
 }
 
-void SimNode::OnWrenchCommand(const implicit_sim::BodyWrench::ConstPtr& msg) {
-  PostBetweenSteps([this, msg] {
-    Journal(JournalInput::kWrenchCommand, *msg);
-    ApplyWrenchCommand(*msg);
-  });
-}
-
-void SimNode::ApplyWrenchCommand(const implicit_sim::BodyWrench& msg) {
+bool SimNode::ApplyWrenchCommand(const implicit_sim::BodyWrench& msg, std::string* error) {
   const Vec3 f = conv::ToVec3(msg.wrench.force), tau = conv::ToVec3(msg.wrench.torque);
-  std::string error;
-  const int b = FindBodyOrFail(msg.body, true, &error);
-  if (b >= 0) CheckWrenchValues(f, tau, &error);
-  long dropped = 0;
-  {
-    std::lock_guard<std::mutex> lock(diag_mutex_);
-    ++diag_.received_wrench_commands;
-    if (!error.empty()) dropped = ++diag_.dropped_wrench_commands;
-  }
-  if (!error.empty()) {
-    ROS_WARN_THROTTLE(1.0, "implicit_sim: dropped ~wrench_cmd: %s (%ld dropped so far)", error.c_str(), dropped);
-    return;
-  }
+  const int b = FindBodyOrFail(msg.body, true, error);
+  if (b < 0 || !CheckWrenchValues(f, tau, error)) return false;
   const int v = Model::v_offset(world_->model->velocity_slot[b]);
   world_->commanded_W.segment<3>(v) = f;
   world_->commanded_W.segment<3>(v + 3) = tau;
+  return true;
 }
 
 bool SimNode::SetJointEfforts(const std::vector<std::string>& names, const std::vector<double>& efforts,
@@ -227,26 +210,8 @@ bool SimNode::SetJointEfforts(const std::vector<std::string>& names, const std::
   return true;
 }
 
-void SimNode::OnJointEffortCommand(const sensor_msgs::JointState::ConstPtr& msg) {
-  PostBetweenSteps([this, msg] {
-    Journal(JournalInput::kJointEffortCommand, *msg);
-    ApplyJointEffortCommand(*msg);
-  });
-}
-
-void SimNode::ApplyJointEffortCommand(const sensor_msgs::JointState& msg) {
-  std::string error;
-  const bool ok = SetJointEfforts(msg.name, msg.effort, &error);
-  long dropped = 0;
-  {
-    std::lock_guard<std::mutex> lock(diag_mutex_);
-    ++diag_.received_joint_commands;
-    if (!ok) dropped = ++diag_.dropped_joint_commands;
-  }
-  if (!ok) {
-    ROS_WARN_THROTTLE(1.0, "implicit_sim: dropped ~joint_effort_cmd: %s (%ld dropped so far)", error.c_str(),
-                      dropped);
-  }
+bool SimNode::ApplyJointEfforts(const sensor_msgs::JointState& msg, std::string* error) {
+  return SetJointEfforts(msg.name, msg.effort, error);
 }
 
 bool SimNode::OnSetJointEfforts(implicit_sim::SetJointEfforts::Request& req,

@@ -23,14 +23,9 @@ using WallClock = std::chrono::steady_clock;
 // How long shutdown waits for a step in progress (a step of a large pile can take seconds) before the node exits
 // without it; roslaunch escalates SIGINT to SIGTERM only after 15 s.
 constexpr double kShutdownGraceS = 2.0;
-// /clock from the physics thread: at most ~clock_rate messages per second of simulation time and at most this many
-// per second of wall time (as fast as possible, sim time runs hundreds of times faster than the wall).
-constexpr double kMaxClockWallRate = 1000.0;  // Hz
 // At real time, a simulation that fell behind by more than this (s of wall time; a slow step) goes on at the real-time
 // pace from where it is instead of catching up in a burst faster than real time.
 constexpr double kMaxPaceLagS = 0.1;
-
-double WallSeconds() { return std::chrono::duration<double>(WallClock::now().time_since_epoch()).count(); }
 
 }  // namespace
 
@@ -48,22 +43,22 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
       params_(NodeParams::Read(pnh)),
       options_(params_.options),
       live_(params_.live),
-      live_options_(params_.options),
-      diagnostics_(nh, pnh) {
+      live_options_(params_.options) {
   world_ = BuildWorld(ReadNodeScene(nh, params_));
   OpenJournals();
   PublishRobotDescription(world_->urdf);
   const Model& model = *world_->model;
   paused_ = params_.paused;
-  diag_.paused = paused_;
+  diagnostics_ = std::make_unique<NodeDiagnostics>(nh, pnh, "implicit_sim " + model.scene_name, paused_);
+  publisher_ = std::make_unique<NodePublisher>(
+      nh, pnh, params_, [this] { return Live(); },
+      [this](const NodeSnapshot& snapshot) { SetUpDragMarkers(*snapshot.model, snapshot.state); },
+      [this](const NodeSnapshot& snapshot) { UpdateDragMarkers(snapshot); });
   SaveSnapshot();
-  AdvertiseTopics();
   AdvertiseServices();
-  PublishStaticTf(model);
+  publisher_->PublishStaticTf(model);
   SetUpReconfigure();
   SetUpDragMarkers(model, world_->state);
-  diagnostics_.setHardwareID("implicit_sim " + model.scene_name);
-  diagnostics_.add("solver", this, &SimNode::UpdateDiagnostics);
   ROS_INFO("implicit_sim: scene '%s', %d moving bodies, %zu contact pairs, h = %g s, %s", model.scene_name.c_str(),
            model.num_moving(), model.pairs.size(), options_.h, paused_ ? "paused" : "running");
 }
@@ -77,7 +72,7 @@ SimNode::~SimNode() {
 void SimNode::Run() {
   ros::AsyncSpinner spinner(4);  // services wait for the physics thread: several may wait at once
   spinner.start();
-  PublishClock(SimTime());
+  publisher_->PublishClock(SimTime());
   StartThread(&physics_thread_, &SimNode::PhysicsLoop);
   StartThread(&publish_thread_, &SimNode::PublishLoop);
   StartThread(&diagnostics_thread_, &SimNode::DiagnosticsLoop);
@@ -211,7 +206,7 @@ void SimNode::StepOnce(double rtf) {
     // Step left the last good state in place (it never publishes NaN): warn once, then pause or reset.
     failure = std::string(StepFaultName(report.fault)) + (report.fault_detail.empty() ? "" : ": ") +
               report.fault_detail;
-    if (params_.on_fault == "reset" && stepped_) {
+    if (params_.on_fault == OnFault::kReset && stepped_) {
       ROS_WARN("implicit_sim: step refused (%s); bodies reset to their initial state", failure.c_str());
       ResetWorld();
     } else {
@@ -219,42 +214,22 @@ void SimNode::StepOnce(double rtf) {
       ROS_ERROR("implicit_sim: step refused (%s); the simulation is paused", failure.c_str());
     }
   }
-  {
-    std::lock_guard<std::mutex> lock(diag_mutex_);
-    ++diag_.steps;
-    ++diag_.faults[static_cast<int>(report.fault)];
-    if (!report.converged) ++diag_.nonconverged;
-    if (!report.advanced) {
-      ++diag_.failed;
-      diag_.last_failure = failure;
-      diag_.fault_holds = paused_;
-    }
-    diag_.paused = paused_;
-    diag_.sim_time = SimTime();
-    diag_.rtf = rtf;
-    diag_.last_iterations = report.iterations;
-    diag_.last_residual = report.residual;
-  }
+  diagnostics_->CountStep(report, failure, paused_, SimTime(), rtf);
   if (!report.advanced) {
     std::lock_guard<std::mutex> lock(mailbox_mutex_);
     job_.sim_time = SimTime();
     if (job_.active) FinishJobLocked(false, "stopped after " + std::to_string(job_.done) + " steps: " + failure);
   }
   SaveSnapshot();
-  PublishClockThrottled(SimTime(), !report.advanced);
-  PublishStepStats(report, SimTime(), step_count_, rtf);
+  publisher_->PublishClockThrottled(SimTime(), !report.advanced);
+  publisher_->PublishStepStats(report, SimTime(), step_count_, rtf);
 }
 
 // The replay cannot go on: pause (and end a ~step or ~run_steps job) before the step, which is not taken.
 void SimNode::RefuseReplayStep(const std::string& refusal) {
   paused_ = true;
   ROS_ERROR("implicit_sim: replay stops: %s; the simulation is paused", refusal.c_str());
-  {
-    std::lock_guard<std::mutex> lock(diag_mutex_);
-    diag_.paused = true;
-    diag_.fault_holds = true;
-    diag_.last_failure = refusal;
-  }
+  diagnostics_->HoldFault(refusal);
   std::lock_guard<std::mutex> lock(mailbox_mutex_);
   if (job_.active) FinishJobLocked(false, "stopped after " + std::to_string(job_.done) + " steps: " + refusal);
 }
@@ -284,7 +259,7 @@ void SimNode::ResetWorld() {
 
 void SimNode::SaveSnapshot() {
   const World& w = *world_;
-  auto snapshot = std::make_shared<Snapshot>();
+  auto snapshot = std::make_shared<NodeSnapshot>();
   snapshot->model = w.model;
   snapshot->state = w.state;
   snapshot->contacts = w.data->contacts;
@@ -296,25 +271,7 @@ void SimNode::SaveSnapshot() {
   for (const DragSpring& drag : w.drags) {
     snapshot->drag_arrows.emplace_back(w.state.X_WL(*w.model, drag.body) * drag.p_LG, drag.target_W);
   }
-  std::lock_guard<std::mutex> lock(latest_mutex_);
-  latest_ = std::move(snapshot);
-}
-
-std::shared_ptr<const SimNode::Snapshot> SimNode::Latest() const {
-  std::lock_guard<std::mutex> lock(latest_mutex_);
-  return latest_;
-}
-
-void SimNode::PublishClockThrottled(double sim_time, bool force) {
-  const double wall = WallSeconds();
-  {
-    std::lock_guard<std::mutex> lock(clock_mutex_);
-    const bool due = sim_time >= last_clock_ + 1.0 / Live().clock_rate - 1e-12 &&
-                     wall >= last_clock_wall_ + 1.0 / kMaxClockWallRate;
-    if (!force && !due) return;
-    last_clock_wall_ = wall;
-  }
-  PublishClock(sim_time);
+  publisher_->Store(std::move(snapshot));
 }
 
 void SimNode::PhysicsLoop() {
@@ -383,25 +340,11 @@ void SimNode::WaitForPace(std::chrono::steady_clock::time_point until) {
 // /clock, /tf and the topics at ~publish_rate (wall time) from the latest snapshot; never waits for a step. The
 // per-state topics are sent when the snapshot changed, so a paused simulation sends nothing again but /clock.
 void SimNode::PublishLoop() {
-  PublishMemory memory;
   WallClock::time_point next = WallClock::now();
   while (!stopping_) {
     const auto period =
         std::chrono::duration_cast<WallClock::duration>(std::chrono::duration<double>(1.0 / Live().publish_rate));
-    const std::shared_ptr<const Snapshot> latest = Latest();
-    const Snapshot& snapshot = *latest;
-    if (memory.model != snapshot.model) {  // a new world: its shapes and static frames, stale contacts deleted
-      if (memory.model) AnnounceNewWorld(snapshot, &memory);
-      memory.model = snapshot.model;
-      memory.on_tf.assign(snapshot.model->bodies.size(), 1);  // jointed links: to robot_state_publisher if asked
-      for (const Joint& joint : snapshot.model->joints) memory.on_tf[joint.child] = params_.publish_joint_link_tf;
-    }
-    PublishClock(snapshot.sim_time);  // every cycle, even when time has not moved (the same time again is allowed)
-    if (snapshot.version != memory.last_version) {
-      memory.last_version = snapshot.version;
-      PublishStateTopics(snapshot, &memory);
-    }
-    UpdateDragMarkers(snapshot, &memory);
+    publisher_->Cycle();
     next += period;
     const WallClock::time_point now = WallClock::now();
     if (next < now) next = now;  // a late cycle is not made up with a burst
@@ -415,7 +358,7 @@ void SimNode::DiagnosticsLoop() {
   std::unique_lock<std::mutex> lock(stop_mutex_);
   while (!stop_cv_.wait_for(lock, std::chrono::seconds(1), [this] { return stopping_.load(); })) {
     lock.unlock();
-    diagnostics_.force_update();
+    diagnostics_->Publish();
     lock.lock();
   }
 }

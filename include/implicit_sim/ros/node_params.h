@@ -41,6 +41,11 @@ const std::vector<LiveParamRange>& LiveParamRanges();
 // "" when value is finite and in range; otherwise the refusal, naming the parameter and its range.
 std::string CheckLiveParam(const LiveParamRange& range, double value);
 
+// What a refused step (initial overlap, divergence, no finite solution) does after the state is restored (~on_fault):
+// "pause" the simulation, or "reset" the bodies to their initial state and run on (pausing instead if the initial
+// state itself is refused).
+enum class OnFault { kPause, kReset };
+
 struct NodeParams {
   // Scene file path, or a name resolved as <scenes_dir>/<name>.urdf; "" -> the robot_description parameter.
   std::string scene;
@@ -48,17 +53,14 @@ struct NodeParams {
   StepperOptions options;         // ~time_step (h), ~scheme, ~tolerance, ~max_iterations, ~solver, ~threads
   LiveParams live;
   bool paused = false;
-  // What a refused step (initial overlap, divergence, no finite solution) does after the state is restored: "pause"
-  // the simulation, or "reset" the bodies to their initial state and run on (pausing instead if the initial state
-  // itself is refused).
-  std::string on_fault = "pause";
+  OnFault on_fault = OnFault::kPause;  // ~on_fault: "pause" or "reset"
   std::string world_frame = "world";
   // Whether /tf carries the links that hang on joints (world -> link, like every other body). Set false to leave them
   // to robot_state_publisher fed by /joint_states (it publishes parent -> child along the URDF tree).
   bool publish_joint_link_tf = true;
-  bool interactive_markers = true;
+  bool interactive_markers = true;  // an interactive marker per moving body (~drag) that pushes it with the mouse
   // A scene whose root link is not `world` (a robot URDF): false welds the root to the world, true makes it free.
-  bool floating_root = false;  // an interactive marker per moving body (~drag) that pushes it with the mouse
+  bool floating_root = false;
   // The input journal (ros/input_journal.h): a file to record every applied command into, and one to replay.
   std::string input_journal, replay_journal;
   // Reads and validates; throws std::invalid_argument naming the parameter and its range, or an unknown private

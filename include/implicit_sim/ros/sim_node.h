@@ -5,8 +5,11 @@
 // to it through a mailbox: a service posts a command and waits for the physics thread to run it between two steps
 // (so it answers within one step, never after a whole ~step job), a command topic posts without waiting, and the
 // publish and diagnostics threads read only the snapshot the physics thread saves after every change. No lock is
-// ever held across a step. By concern: sim_node.cpp (threads, mailbox, stepping), node_jobs.cpp (the ~step service
-// and the ~run_steps action), node_params.cpp, node_services.cpp, node_publishers.cpp.
+// ever held across a step. Parts with locks of their own: NodePublisher (node_publisher.h: the topics, from
+// snapshots) and NodeDiagnostics (node_diagnostics.h: the counters of /diagnostics). By concern: sim_node.cpp
+// (threads, mailbox, stepping), node_jobs.cpp (the ~step service and the ~run_steps action), node_services.cpp
+// (services, and the command topics' one path: SubscribeCommand, ApplyCommand), node_world.cpp, node_drives.cpp,
+// node_drag.cpp, node_reconfigure.cpp, node_journal.cpp.
 #pragma once
 
 #include <atomic>
@@ -21,7 +24,6 @@
 #include <vector>
 
 #include <actionlib/server/simple_action_server.h>
-#include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <Eigen/Core>
 #include <interactive_markers/interactive_marker_server.h>
@@ -49,6 +51,8 @@
 #include "implicit_sim/core/model/urdf_loader.h"
 #include "implicit_sim/core/step/time_stepper.h"
 #include "implicit_sim/ros/input_journal.h"
+#include "implicit_sim/ros/node_diagnostics.h"
+#include "implicit_sim/ros/node_publisher.h"
 #include "implicit_sim/ros/node_params.h"
 
 namespace implicit_sim {
@@ -118,30 +122,6 @@ class SimNode {
     explicit World(std::shared_ptr<const Model> loaded);
   };
 
-  // The latest state, saved by the physics thread after every change; the publish thread and the read-only services
-  // use only this. `version` grows with every saved snapshot.
-  struct Snapshot {
-    std::shared_ptr<const Model> model;
-    State state;
-    std::vector<ContactResult> contacts;
-    Eigen::VectorXd efforts;  // per model joint: the commanded effort (N m or N)
-    std::vector<double> drive_efforts;  // per model joint: the drive's effort over the last step (N m or N)
-    double sim_time = 0.0;    // s
-    uint64_t version = 0;
-    bool stepped = false;     // a step has run since startup or the last reset (contact results exist)
-    std::vector<std::pair<Vec3, Vec3>> drag_arrows;  // per drag: the grabbed point and the target (m, world)
-  };
-  // What the publish thread keeps from one cycle to the next (touched by it only).
-  struct PublishMemory {
-    std::shared_ptr<const Model> model;      // the model the shapes below belong to
-    std::vector<char> on_tf;                 // per body: whether /tf carries its link
-    std::vector<int> shown_pairs, active_pairs;  // pairs with contact markers: last published, current
-    double last_tf_time = -1.0;              // s, simulation time of the last /tf
-    uint64_t last_version = 0;               // snapshot version last published
-    int shown_drag_arrows = 0;               // drag arrows last published (ids 0 ... n-1)
-    double next_drag_update = 0.0;           // s of wall time: the next pose update of the interactive markers
-    uint64_t drag_version = 0;               // snapshot version the interactive markers show
-  };
   // A ~step or ~run_steps request: steps run by the physics thread while paused. Guarded by mailbox_mutex_.
   struct StepJob {
     bool active = false, cancel = false, finished = false, success = false;
@@ -149,19 +129,19 @@ class SimNode {
     double sim_time = 0.0;  // s, after the last step done
     std::string message;
   };
-  // Counters for /diagnostics, written by the physics thread and the command callbacks. Guarded by diag_mutex_.
-  struct DiagnosticCounters {
-    long steps = 0, nonconverged = 0, failed = 0;  // since the last report
-    long received_wrench_commands = 0, dropped_wrench_commands = 0;
-    long received_joint_commands = 0, dropped_joint_commands = 0;
-    long received_drive_commands = 0, dropped_drive_commands = 0;
-    long faults[6] = {0, 0, 0, 0, 0, 0};  // refused or non-converged steps since startup, by StepFault
-    bool paused = false;
-    bool fault_holds = false;  // a refused step paused the simulation; cleared by ~unpause, ~reset
-    std::string last_failure;
-    double sim_time = 0.0, rtf = 0.0, last_residual = 0.0;
-    long last_iterations = 0;
+  // A command topic: its name (for warnings), its journal kind, its /diagnostics counter and what applies a message
+  // on the physics thread (false with *error when the message is refused). One each, defined in node_services.cpp.
+  template <typename Message>
+  struct CommandInput {
+    const char* topic;
+    JournalInput journal;
+    CommandTopic counter;
+    bool (SimNode::*apply)(const Message& msg, std::string* error);
   };
+  static const CommandInput<implicit_sim::BodyWrench> kWrenchInput;
+  static const CommandInput<sensor_msgs::JointState> kJointEffortInput;
+  static const CommandInput<implicit_sim::JointCommand> kJointCommandInput;
+  static const CommandInput<trajectory_msgs::JointTrajectory> kJointTrajectoryInput;
   struct Command {
     std::function<void()> run;
     bool done = false;
@@ -192,9 +172,7 @@ class SimNode {
   void StepOnce(double rtf);             // one step with the active wrenches
   void ResetWorld();                     // bodies back to the initial state, warm start and wrenches cleared
   void ComputeWrenches();                // fills wrench_W for the step starting now
-  void SaveSnapshot();                   // the current state as the latest snapshot
-  std::shared_ptr<const Snapshot> Latest() const;
-  void PublishClockThrottled(double sim_time, bool force);
+  void SaveSnapshot();                   // the current state as the latest snapshot (NodePublisher::Store)
   void PublishLoop();
   void DiagnosticsLoop();
   // Sets stopping_, wakes every thread and joins them once all have ended within grace_s (s); false,
@@ -212,36 +190,15 @@ class SimNode {
   void SetUpReconfigure();
   void OnReconfigure(SimNodeConfig& next);
   // node_drives.cpp: joint drives.
-  void OnJointCommand(const implicit_sim::JointCommand::ConstPtr& msg);
-  void OnJointTrajectory(const trajectory_msgs::JointTrajectory::ConstPtr& msg);
   bool ApplyJointCommand(const implicit_sim::JointCommand& msg, std::string* error);          // physics thread
   bool StartTrajectory(const trajectory_msgs::JointTrajectory& msg, std::string* error);      // physics thread
   void StopTrajectoryOf(int joint);
   void UpdateTrajectoryDrives();  // the trajectories' targets for the step starting now
-  void CountDriveCommand(bool ok, const char* topic, const std::string& error);
   // node_drag.cpp: interactive markers that push bodies.
   void SetUpDragMarkers(const Model& model, const State& state);
   void OnDrag(const visualization_msgs::InteractiveMarkerFeedbackConstPtr& feedback);
   void AddDragWrenches();  // physics thread, into wrench_W
-  void UpdateDragMarkers(const Snapshot& snapshot, PublishMemory* memory);
-  // node_publishers.cpp: one function per topic.
-  void AdvertiseTopics();
-  void PublishClock(double sim_time);
-  void PublishStepStats(const StepReport& report, double sim_time, uint64_t step, double rtf);
-  void PublishStaticTf(const Model& model);
-  void PublishTf(const Snapshot& snapshot, const ros::Time& stamp, PublishMemory* memory);
-  void PublishStateTopics(const Snapshot& snapshot, PublishMemory* memory);  // after a change of the state
-  void AnnounceNewWorld(const Snapshot& snapshot, PublishMemory* memory);    // static tf, shapes, drag markers
-  void PublishContactMarkers(const Snapshot& snapshot, PublishMemory* memory);
-  sensor_msgs::JointState JointStatesMsg(const Snapshot& snapshot) const;
-  implicit_sim::Contacts ContactsMsg(const Snapshot& snapshot) const;
-  // The current message of a per-state topic to one new subscriber.
-  void SendContacts(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to);
-  void SendBodyStates(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to);
-  void SendJointStates(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to);
-  void SendMarkers(const Snapshot& snapshot, const ros::SingleSubscriberPublisher& to);
-  void AppendDragArrows(const Snapshot& snapshot, int shown, double size, visualization_msgs::MarkerArray* msg) const;
-  void UpdateDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status);
+  void UpdateDragMarkers(const NodeSnapshot& snapshot);  // publish thread
   // node_services.cpp: services and command topics (run on the physics thread through the mailbox).
   void AdvertiseServices();
   int FindBodyOrFail(const std::string& name, bool must_move, std::string* error) const;
@@ -252,11 +209,26 @@ class SimNode {
   bool OnGetBodyState(implicit_sim::GetBodyState::Request& req, implicit_sim::GetBodyState::Response& res);
   bool OnSetBodyState(implicit_sim::SetBodyState::Request& req, implicit_sim::SetBodyState::Response& res);
   bool OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req, implicit_sim::ApplyBodyWrench::Response& res);
-  void OnWrenchCommand(const implicit_sim::BodyWrench::ConstPtr& msg);
-  void ApplyWrenchCommand(const implicit_sim::BodyWrench& msg);  // physics thread
-  void ApplyJointEffortCommand(const sensor_msgs::JointState& msg);  // physics thread
-  void ApplyJointCommandCounted(const implicit_sim::JointCommand& msg);  // physics thread
-  void StartTrajectoryCounted(const trajectory_msgs::JointTrajectory& msg);  // physics thread
+  bool ApplyWrenchCommand(const implicit_sim::BodyWrench& msg, std::string* error);  // physics thread
+  bool ApplyJointEfforts(const sensor_msgs::JointState& msg, std::string* error);    // physics thread
+  // Subscribes to a command topic: each message is posted to the physics thread, journaled and applied (ApplyCommand).
+  template <typename Message>
+  ros::Subscriber SubscribeCommand(const std::string& name, uint32_t queue, const CommandInput<Message>& input) {
+    return pnh_.subscribe<Message>(
+        name, queue, boost::function<void(const typename Message::ConstPtr&)>([this, &input](const auto& msg) {
+          PostBetweenSteps([this, &input, msg] {
+            Journal(input.journal, *msg);
+            ApplyCommand(*msg, input);
+          });
+        }));
+  }
+  // A command topic's message on the physics thread (received or replayed): applied and counted in /diagnostics.
+  template <typename Message>
+  void ApplyCommand(const Message& msg, const CommandInput<Message>& input) {
+    std::string error;
+    const bool accepted = (this->*input.apply)(msg, &error);
+    diagnostics_->CountCommand(input.counter, input.topic, accepted, error);
+  }
   // The input journal (physics thread): record a command topic's message, or mark an input it cannot replay.
   template <typename Message>
   void Journal(JournalInput kind, const Message& msg) {
@@ -274,7 +246,6 @@ class SimNode {
   void WaitForPace(std::chrono::steady_clock::time_point until);  // physics thread, between paced steps
   bool SetJointEfforts(const std::vector<std::string>& names, const std::vector<double>& efforts,
                        std::string* error);  // all or nothing; physics thread
-  void OnJointEffortCommand(const sensor_msgs::JointState::ConstPtr& msg);
   bool OnSetJointEfforts(implicit_sim::SetJointEfforts::Request& req, implicit_sim::SetJointEfforts::Response& res);
 
   ros::NodeHandle nh_, pnh_;
@@ -306,19 +277,16 @@ class SimNode {
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<SimNodeConfig>> reconfigure_;
 
-  std::mutex diag_mutex_;
-  DiagnosticCounters diag_;
+  std::unique_ptr<NodeDiagnostics> diagnostics_;  // /diagnostics: its own lock, read by the diagnostics thread
 
   std::unique_ptr<interactive_markers::InteractiveMarkerServer> drag_server_;
   std::mutex drag_mutex_;
   std::set<std::string> dragged_;  // bodies being dragged (their marker is the user's); guarded by drag_mutex_
 
-  std::mutex clock_mutex_;
-  double last_clock_ = -1.0;                 // s of sim time, the latest /clock
-  double last_clock_wall_ = -1.0;            // s of wall time (steady clock) of the latest throttled /clock
+  double next_drag_update_ = 0.0;  // publish thread: s of wall time, the next pose update of the interactive markers
+  uint64_t drag_version_ = 0;      // publish thread: the snapshot version the interactive markers show
 
-  mutable std::mutex latest_mutex_;
-  std::shared_ptr<const Snapshot> latest_;  // guarded by latest_mutex_
+  std::unique_ptr<NodePublisher> publisher_;  // the topics, from snapshots; its own locks
 
   // Every thread ends: the physics thread after the step in progress, the others at once.
   std::atomic<bool> stopping_{false};
@@ -326,11 +294,8 @@ class SimNode {
   std::condition_variable stop_cv_;    // wakes the publish and diagnostics threads' waits, and StopThreads
   int threads_started_ = 0, threads_ended_ = 0;  // guarded by stop_mutex_
 
-  ros::Publisher clock_pub_, tf_pub_, contacts_pub_, markers_pub_, stats_pub_, body_states_pub_, joint_states_pub_;
   std::vector<ros::ServiceServer> services_;
   ros::Subscriber wrench_sub_, joint_effort_sub_, joint_command_sub_, joint_trajectory_sub_;
-  tf2_ros::StaticTransformBroadcaster static_broadcaster_;
-  diagnostic_updater::Updater diagnostics_;
   std::unique_ptr<actionlib::SimpleActionServer<implicit_sim::RunStepsAction>> run_steps_server_;
   std::thread physics_thread_, publish_thread_, diagnostics_thread_;
 };

@@ -1,4 +1,4 @@
-// Joints (issue 8): URDF joints as bilateral constraints inside the step NCP. Physics against closed forms and an
+// Joints: URDF joints as bilateral constraints inside the step NCP. Physics against closed forms and an
 // independent integration, limits, friction through contact, actuation, and the loader's joint model.
 #include <algorithm>
 #include <cmath>
@@ -80,7 +80,7 @@ TEST(Joints, PendulumPeriodMatchesTheExactFiniteAmplitudePeriodAndTheJointDoesNo
               "energy spread %.2e J\n", period, T_exact, period / T_exact - 1.0, run.max_position_error,
               run.max_angle_error, run.energy_spread);
   EXPECT_EQ(run.nonconverged, 0);
-  EXPECT_LT(std::abs(period / T_exact - 1.0), 0.005);  // the issue's bar
+  EXPECT_LT(std::abs(period / T_exact - 1.0), 0.005);  // the bar of doc/scenes.md's joint table
   EXPECT_LT(std::abs(period / T_exact - 1.0), 1e-4);   // what the method achieves at h = 0.001
   EXPECT_LE(run.max_position_error, 1e-8);
   EXPECT_LE(run.max_angle_error, 1e-8);

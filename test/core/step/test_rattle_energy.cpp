@@ -61,9 +61,9 @@ RockingRun Rock(const StepperOptions& options, double duration, double lift = 0.
   return out;
 }
 
-// The bars: drift at 10 s within 5e-3 / 1e-5 of the rocking energy, peak-to-peak within 2e-2 / 3e-4, no
-// penetration. Measured -2.45e-3 / -4.86e-6 and 1.40e-2 / 1.39e-4, as the reference statement predicts
-// (../shared/reference/rattle_rocking_reference.py: -2.5e-3, 1.4e-2; -4.9e-6, 1.4e-4). The paper's step keeps none of
+// The bars (README, "Smooth motion"): drift at 10 s within 5e-3 / 1e-5 of the rocking energy, peak-to-peak within
+// 2e-2 / 3e-4, no penetration. Measured -2.45e-3 / -4.86e-6 and 1.40e-2 / 1.39e-4, as an independent statement of
+// the same step in Python predicts (-2.5e-3, 1.4e-2; -4.9e-6, 1.4e-4; doc/method.md). The paper's step keeps none of
 // it at h = 0.01 and 0.9 % at h = 0.001 (test_time_stepper.cpp).
 TEST(RattleEnergy, RockingEllipsoidKeepsItsEnergyToSecondOrder) {
   const double drift_bar[2] = {5e-3, 1e-5}, peak_bar[2] = {2e-2, 3e-4};

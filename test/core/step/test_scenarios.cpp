@@ -1,5 +1,5 @@
 // The paper's three examples (doc/paper_figures.md; reference numbers in test/data/reference/)
-// run from the scene files in scenes/, with the bars of issue 3. Non-penetration is checked independently of the
+// run from the scene files in scenes/, with the bars of the README's table. Non-penetration is checked independently of the
 // solver: closed-form lowest points for the discs and the sphere, the Ipopt distance oracle for P3.
 #include <cmath>
 #include <vector>

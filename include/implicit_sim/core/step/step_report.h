@@ -16,6 +16,7 @@ enum class StepFault {
   kDiverged,          // the end velocities exceed max_speed or max_angular_speed
   kCrossing,          // a body passed through another even in the shortest sub-step (step_health.h, FindCrossing)
 };
+constexpr int kNumStepFaults = 6;            // StepFault's values, kNone included
 const char* StepFaultName(StepFault fault);  // "none", "not_converged", "no_finite_solution", "initial_overlap", "diverged",
                                              // "crossing"
 
