@@ -29,14 +29,6 @@ constexpr double kMaxPaceLagS = 0.1;
 
 }  // namespace
 
-SimNode::World::World(std::shared_ptr<const Model> loaded)
-    : model(std::move(loaded)), data(std::make_unique<Data>(*model)) {
-  state = initial_state = State::Initial(*model);
-  commanded_W = Eigen::VectorXd::Zero(model->nv());
-  wrench_W = Eigen::VectorXd::Zero(model->nv());
-  joint_efforts = Eigen::VectorXd::Zero(model->joints.size());
-}
-
 SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
     : nh_(nh),
       pnh_(pnh),
@@ -44,7 +36,7 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
       options_(params_.options),
       live_(params_.live),
       live_options_(params_.options) {
-  world_ = BuildWorld(ReadNodeScene(nh, params_));
+  world_ = BuildWorld(params_, ReadNodeScene(nh, params_));
   OpenJournals();
   PublishRobotDescription(world_->urdf);
   const Model& model = *world_->model;

@@ -53,6 +53,7 @@
 #include "implicit_sim/ros/input_journal.h"
 #include "implicit_sim/ros/node_diagnostics.h"
 #include "implicit_sim/ros/node_publisher.h"
+#include "implicit_sim/ros/world.h"
 #include "implicit_sim/ros/node_params.h"
 
 namespace implicit_sim {
@@ -69,9 +70,6 @@ bool ShuttingDownAnswer(Response& res) {
   return true;
 }
 
-// A 'package://pkg/path' URI as a file path through rospack; "" when the package is unknown or it is no such URI.
-std::string ResolvePackageUri(const std::string& uri);
-
 class SimNode {
  public:
   // Loads the scene and sets up publishers and services; throws std::invalid_argument for a bad parameter or scene.
@@ -81,47 +79,6 @@ class SimNode {
   void Run();
 
  private:
-  struct TimedWrench {
-    int body;            // moving body receiving it
-    int frame_body;      // body whose link frame expresses it, -1 for the world frame
-    Vec3 point, force, torque;  // in that frame (m, N, N m)
-    double start, end;   // simulation time (s); end < 0: until cleared
-  };
-
-  // A mouse drag (node_drag.cpp): a spring from the grabbed point G of a body to the target the marker gives.
-  struct DragSpring {
-    int body;
-    Vec3 p_LG;      // the grabbed point in the body's link frame (m)
-    Vec3 target_W;  // where the spring pulls it, world frame (m)
-    Vec3 p_GM_W;    // from the grabbed point to the marker origin at the grab, world frame (m)
-  };
-
-  // A ~joint_trajectory being followed (node_drives.cpp); times in s, positions in rad or m.
-  struct Trajectory {
-    std::vector<int> joints;  // model joints; -1 where a later command took the joint over
-    double start = 0.0;       // simulation time of time_from_start = 0 (s)
-    std::vector<double> times, from;  // time_from_start of each point; the joints' positions at the start
-    std::vector<std::vector<double>> positions, velocities;  // per point, per joint
-    double stiffness = 0.0, damping = 0.0;  // the drive gains (~drive_stiffness, ~drive_damping when received)
-  };
-
-  // What the physics thread steps. Data keeps a pointer to its model, so the model lives on the heap.
-  struct World {
-    std::shared_ptr<const Model> model;
-    State state, initial_state;
-    std::unique_ptr<Data> data;
-    std::vector<TimedWrench> wrenches;
-    Eigen::VectorXd commanded_W;    // ~wrench_cmd per moving slot (Model::v_offset): f_W (N), tau_W (N m) at the link
-                                    // origin
-    Eigen::VectorXd wrench_W;       // the wrench handed to the core (at the centre of mass; core/model/wrench.h)
-    Eigen::VectorXd joint_efforts;  // per model joint: the commanded effort (N m or N; fixed joints 0)
-    std::vector<DragSpring> drags;
-    std::vector<Trajectory> trajectories;
-    std::string urdf;       // the scene's URDF text (what ~spawn and ~delete edit)
-    std::string scene_dir;  // where its relative mesh paths resolve ("" for a scene given as text)
-    explicit World(std::shared_ptr<const Model> loaded);
-  };
-
   // A ~step or ~run_steps request: steps run by the physics thread while paused. Guarded by mailbox_mutex_.
   struct StepJob {
     bool active = false, cancel = false, finished = false, success = false;
@@ -147,14 +104,7 @@ class SimNode {
     bool done = false;
   };
 
-  // node_world.cpp: the open world.
-  LoaderOptions SceneLoaderOptions(const std::string& mesh_directory, std::vector<std::string>* warnings) const;
-  // The scene a request names (its text, or a file under the allowed directories); false with *error otherwise.
-  bool ReadRequestedScene(const std::string& urdf, const std::string& file, SceneText* out, std::string* error) const;
-  std::unique_ptr<World> BuildWorld(const SceneText& scene) const;  // throws std::invalid_argument (the loader's)
-  void CarryOver(const World& from, World* to) const;  // the shared bodies' state and commands, by name
-  // The current world edited to `urdf` (same name and mesh directory), with what it shares carried over.
-  std::unique_ptr<World> EditedWorld(const std::string& urdf) const;
+  // node_world.cpp: the open world (its worlds are read, built and edited by world.h).
   void ReplaceWorld(std::unique_ptr<World> next);       // physics thread
   void PublishRobotDescription(const std::string& urdf) const;
   bool OnSpawn(implicit_sim::Spawn::Request& req, implicit_sim::Spawn::Response& res);

@@ -1,0 +1,159 @@
+#include "implicit_sim/ros/world.h"
+
+#include <filesystem>
+
+#include <ros/console.h>
+#include <ros/package.h>
+
+#include "implicit_sim/core/model/urdf_loader.h"
+
+namespace implicit_sim {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Whether `path` lies inside directory `dir` (both made canonical; a missing path never does).
+bool IsInside(const fs::path& path, const std::string& dir) {
+  std::error_code ec;
+  const fs::path canonical_dir = fs::canonical(dir, ec);
+  if (ec) return false;
+  const fs::path canonical = fs::canonical(path, ec);
+  if (ec) return false;
+  const std::string d = canonical_dir.string() + "/", p = canonical.string();
+  return p.compare(0, d.size(), d) == 0;
+}
+
+}  // namespace
+
+World::World(std::shared_ptr<const Model> loaded)
+    : model(std::move(loaded)), data(std::make_unique<Data>(*model)) {
+  state = initial_state = State::Initial(*model);
+  commanded_W = Eigen::VectorXd::Zero(model->nv());
+  wrench_W = Eigen::VectorXd::Zero(model->nv());
+  joint_efforts = Eigen::VectorXd::Zero(model->joints.size());
+}
+
+std::string ResolvePackageUri(const std::string& uri) {
+  const std::string scheme = "package://";
+  if (uri.compare(0, scheme.size(), scheme) != 0) return "";
+  const std::string rest = uri.substr(scheme.size());
+  const size_t slash = rest.find('/');
+  const std::string package = ros::package::getPath(rest.substr(0, slash));
+  if (package.empty()) return "";
+  return slash == std::string::npos ? package : package + rest.substr(slash);
+}
+
+namespace {
+
+LoaderOptions SceneLoaderOptions(const NodeParams& params, const std::string& mesh_directory,
+                                 std::vector<std::string>* warnings) {
+  LoaderOptions options;
+  options.floating_root = params.floating_root;
+  options.resolve_package_uri = ResolvePackageUri;
+  options.mesh_directory = mesh_directory;
+  options.warnings = warnings;
+  return options;
+}
+
+// The state and commands of the bodies and joints `to` shares with `from`, by name.
+void CarryOver(const World& from, World* to) {
+  const Model &old_model = *from.model, &model = *to->model;
+  to->state.t = from.state.t;
+  for (int slot = 0; slot < model.num_moving(); ++slot) {
+    const int b = model.moving_bodies[slot];
+    const int old = old_model.FindBody(model.bodies[b].name);
+    if (old < 0 || old_model.bodies[old].is_fixed) continue;
+    const int old_slot = old_model.velocity_slot[old];
+    to->state.q.segment<7>(Model::q_offset(slot)) = from.state.q.segment<7>(Model::q_offset(old_slot));
+    to->state.v.segment<6>(Model::v_offset(slot)) = from.state.v.segment<6>(Model::v_offset(old_slot));
+    to->commanded_W.segment<6>(Model::v_offset(slot)) = from.commanded_W.segment<6>(Model::v_offset(old_slot));
+  }
+  std::vector<int> joint_in_new(old_model.joints.size(), -1);
+  for (size_t j = 0; j < model.joints.size(); ++j) {
+    const int old = old_model.FindJoint(model.joints[j].name);
+    if (old < 0) continue;
+    joint_in_new[old] = static_cast<int>(j);
+    to->joint_efforts[j] = from.joint_efforts[old];
+    to->data->joint_drives[j] = from.data->joint_drives[old];
+  }
+  for (Trajectory trajectory : from.trajectories) {
+    for (int& j : trajectory.joints) j = j < 0 ? -1 : joint_in_new[j];
+    to->trajectories.push_back(std::move(trajectory));
+  }
+  const auto body_in_new = [&](int old_body) {
+    return old_body < 0 ? -1 : model.FindBody(old_model.bodies[old_body].name);
+  };
+  for (TimedWrench w : from.wrenches) {
+    const int body = body_in_new(w.body), frame = body_in_new(w.frame_body);
+    if (body < 0 || (w.frame_body >= 0 && frame < 0)) continue;  // on (or expressed in) a removed body
+    w.body = body;
+    w.frame_body = frame;
+    to->wrenches.push_back(w);
+  }
+  for (DragSpring drag : from.drags) {
+    drag.body = body_in_new(drag.body);
+    if (drag.body >= 0) to->drags.push_back(drag);
+  }
+}
+
+}  // namespace
+
+bool ReadRequestedScene(const NodeParams& params, const std::string& urdf, const std::string& file, SceneText* out,
+                        std::string* error) {
+  if (!urdf.empty() && !file.empty()) {
+    *error = "give urdf or file, not both";
+    return false;
+  }
+  if (!urdf.empty()) {
+    *out = SceneText{urdf, "scene", ""};
+    return true;
+  }
+  if (file.empty()) {
+    *error = "give the scene as urdf (its text) or file";
+    return false;
+  }
+  fs::path path;
+  if (file.compare(0, 10, "package://") == 0) {
+    path = ResolvePackageUri(file);
+    if (path.empty()) {
+      *error = "file '" + file + "': no such package";
+      return false;
+    }
+  } else if (file.find('/') == std::string::npos && fs::path(file).extension() != ".urdf") {
+    path = fs::path(params.scenes_dir) / (file + ".urdf");  // a scene name
+  } else {
+    path = file;
+    if (!IsInside(path, params.scenes_dir) && !IsInside(path, IMPLICIT_SIM_SCENES_DIR)) {
+      *error = "file '" + file + "' is not a file under ~scenes_dir (" + params.scenes_dir +
+               ") or the package's scenes/: the node reads scene files there and from package:// URIs only";
+      return false;
+    }
+  }
+  try {
+    *out = SceneText{ReadSceneFile(path.string()), path.stem().string(), path.parent_path().string()};
+  } catch (const std::exception& e) {
+    *error = e.what();
+    return false;
+  }
+  return true;
+}
+
+std::unique_ptr<World> BuildWorld(const NodeParams& params, const SceneText& scene) {
+  std::vector<std::string> warnings;
+  auto model = std::make_shared<const Model>(
+      LoadSceneFromString(scene.urdf, scene.name, SceneLoaderOptions(params, scene.dir, &warnings)));
+  for (const std::string& warning : warnings) ROS_WARN("%s", warning.c_str());
+  CheckWorldFrame(*model, params.world_frame);
+  auto world = std::make_unique<World>(std::move(model));
+  world->urdf = scene.urdf;
+  world->scene_dir = scene.dir;
+  return world;
+}
+
+std::unique_ptr<World> EditedWorld(const NodeParams& params, const World& current, const std::string& urdf) {
+  std::unique_ptr<World> next = BuildWorld(params, SceneText{urdf, current.model->scene_name, current.scene_dir});
+  CarryOver(current, next.get());
+  return next;
+}
+
+}  // namespace implicit_sim
