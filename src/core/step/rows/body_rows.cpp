@@ -9,19 +9,33 @@ namespace {
 
 Vec3 Vee(const Mat3& S) { return Vec3(S(2, 1), S(0, 2), S(1, 0)); }
 
+// The i-th moving body of the layout as its body rows see it.
+struct BodyRowsOf {
+  BodyRowsOf(const RowContext& ctx, int i)
+      : local(ctx.layout.slot_body(i)),
+        body(ctx.model().bodies[ctx.layout.bodies()[local]]),
+        row(6 * i),
+        f_ext(ctx.kinematics.ExternalForce(i)),
+        tau_ext(ctx.kinematics.ExternalTorque(i)) {}
+  const int local;    // index into layout.bodies()
+  const Body& body;
+  const int row;      // its first row and velocity column
+  const Vec3 f_ext, tau_ext;  // N, N m over the step
+};
+
 }  // namespace
 
 void AddEndMomentumRows(const RowContext& ctx) {
   const double Fs = ctx.Fs(), h = ctx.h();
   const std::vector<int>& slots = ctx.layout.slots();
   for (size_t i = 0; i < slots.size(); ++i) {
-    const int local = ctx.layout.slot_body(static_cast<int>(i));
-    const Body& body = ctx.model().bodies[ctx.layout.bodies()[local]];
-    const BodyStart& s = ctx.kinematics.start(local);
-    const BodyEnd& e = ctx.ends[local];
-    const int row = static_cast<int>(6 * i);
-    const Vec3 f_ext = ctx.kinematics.ExternalForce(static_cast<int>(i));
-    const Vec3 tau_ext = ctx.kinematics.ExternalTorque(static_cast<int>(i));
+    const BodyRowsOf b(ctx, static_cast<int>(i));
+    const Body& body = b.body;
+    const BodyStart& s = ctx.kinematics.start(b.local);
+    const BodyEnd& e = ctx.ends[b.local];
+    const int row = b.row;
+    const Vec3& f_ext = b.f_ext;
+    const Vec3& tau_ext = b.tau_ext;
     ctx.out.AddJ(row, row, Mat3(Mat3::Identity() * body.mass / (h * Fs)));
     ctx.out.Phi.segment<3>(row) = (body.mass * (ctx.z.segment<3>(row) - s.v0) / h - f_ext) / Fs;
     // Angular momentum form: (I_W(R1) w1 - I_W(R0) w0) / h = torque, with R1 = Exp(h w1) R0. It conserves angular
@@ -38,13 +52,13 @@ void AddHalfStepMomentumRows(const RowContext& ctx) {
   const double Fs = ctx.Fs(), h = ctx.h();
   const std::vector<int>& slots = ctx.layout.slots();
   for (size_t i = 0; i < slots.size(); ++i) {
-    const int local = ctx.layout.slot_body(static_cast<int>(i));
-    const Body& body = ctx.model().bodies[ctx.layout.bodies()[local]];
-    const BodyStart& s = ctx.kinematics.start(local);
-    const BodyEnd& e = ctx.ends[local];
-    const int row = static_cast<int>(6 * i);
-    const Vec3 f_ext = ctx.kinematics.ExternalForce(static_cast<int>(i));
-    const Vec3 tau_ext = ctx.kinematics.ExternalTorque(static_cast<int>(i));
+    const BodyRowsOf b(ctx, static_cast<int>(i));
+    const Body& body = b.body;
+    const BodyStart& s = ctx.kinematics.start(b.local);
+    const BodyEnd& e = ctx.ends[b.local];
+    const int row = b.row;
+    const Vec3& f_ext = b.f_ext;
+    const Vec3& tau_ext = b.tau_ext;
     ctx.out.AddJ(row, row, Mat3(Mat3::Identity() * body.mass / (h * Fs)));
     ctx.out.Phi.segment<3>(row) = (body.mass * (ctx.z.segment<3>(row) - s.v0) / h - 0.5 * f_ext) / Fs;
     Mat3 dL_dtheta, dL_dw;
@@ -58,15 +72,13 @@ void AddFixedGeometryMomentumRows(const RowContext& ctx, const std::vector<BodyH
   const double Fs = ctx.Fs(), h = ctx.h();
   const std::vector<int>& slots = ctx.layout.slots();
   for (size_t i = 0; i < slots.size(); ++i) {
-    const int local = ctx.layout.slot_body(static_cast<int>(i));
-    const Body& body = ctx.model().bodies[ctx.layout.bodies()[local]];
-    const BodyHalf& b = half[local];
-    const int row = static_cast<int>(6 * i);
-    const Vec3 f_ext = ctx.kinematics.ExternalForce(static_cast<int>(i));
-    const Vec3 tau_ext = ctx.kinematics.ExternalTorque(static_cast<int>(i));
+    const BodyRowsOf rows(ctx, static_cast<int>(i));
+    const Body& body = rows.body;
+    const BodyHalf& b = half[rows.local];
+    const int row = rows.row;
     const Mat3 I_W1 = b.R1 * body.I_B * b.R1.transpose();
-    ctx.out.Phi.segment<3>(row) = (body.mass * (ctx.z.segment<3>(row) - b.v_half) / h - 0.5 * f_ext) / Fs;
-    ctx.out.Phi.segment<3>(row + 3) = ((I_W1 * ctx.z.segment<3>(row + 3) - b.L_half) / h - 0.5 * tau_ext) / Fs;
+    ctx.out.Phi.segment<3>(row) = (body.mass * (ctx.z.segment<3>(row) - b.v_half) / h - 0.5 * rows.f_ext) / Fs;
+    ctx.out.Phi.segment<3>(row + 3) = ((I_W1 * ctx.z.segment<3>(row + 3) - b.L_half) / h - 0.5 * rows.tau_ext) / Fs;
     ctx.out.AddJ(row, row, Mat3(Mat3::Identity() * body.mass / (h * Fs)));
     ctx.out.AddJ(row + 3, row + 3, Mat3(I_W1 / (h * Fs)));
   }
