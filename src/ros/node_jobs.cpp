@@ -22,61 +22,28 @@ bool SimNode::StartJob(uint64_t steps, uint64_t max_steps, std::string* refusal)
   } else if (steps < 1 || steps > max_steps) {
     *refusal = "steps must be in [1, " + std::to_string(max_steps) + "], got " + std::to_string(steps);
   }
-  std::lock_guard<std::mutex> lock(mailbox_mutex_);
-  if (refusal->empty() && job_.active) *refusal = "refused: another ~step or ~run_steps job is running";
-  if (!refusal->empty()) return false;
-  job_ = StepJob();
-  job_.active = true;
-  job_.requested = steps;
-  job_.sim_time = SimTime();
-  return true;
-}
-
-void SimNode::RunJobStep() {
-  StepOnce(0.0);  // a failed step finishes the job itself
-  std::lock_guard<std::mutex> lock(mailbox_mutex_);
-  if (!job_.active) return;
-  ++job_.done;
-  job_.sim_time = SimTime();
-  if (job_.done == job_.requested) FinishJobLocked(true, "ran " + std::to_string(job_.done) + " steps");
-}
-
-void SimNode::FinishJobLocked(bool success, const std::string& message) {
-  job_.active = false;
-  job_.finished = true;
-  job_.success = success;
-  job_.message = message;
-  mailbox_cv_.notify_all();
+  return refusal->empty() && mailbox_.StartJob(steps, SimTime(), refusal);
 }
 
 bool SimNode::OnStep(implicit_sim::Step::Request& req, implicit_sim::Step::Response& res) {
   std::string refusal;
   bool started = false;
-  if (!RunBetweenSteps([&] {
+  if (!mailbox_.RunBetweenSteps([&] {
         res.sim_time = SimTime();
         started = StartJob(req.steps, kMaxServiceSteps, &refusal);
       })) {
-    res.success = false;
-    res.message = "refused: the node is shutting down";
-    return true;
+    return ShuttingDownAnswer(res);
   }
   if (!started) {
     res.success = false;
     res.message = refusal;
     return true;
   }
-  std::unique_lock<std::mutex> lock(mailbox_mutex_);
-  mailbox_cv_.wait(lock, [this] { return job_.finished || stopping_; });
-  if (!job_.finished) {
-    res.success = false;
-    res.message = "stopped after " + std::to_string(job_.done) + " steps: the node is shutting down";
-  } else {
-    res.success = job_.success;
-    res.message = job_.message;
-  }
-  res.sim_time = job_.sim_time;
-  job_.finished = false;
-  lock.unlock();
+  const StepJob job = mailbox_.WaitForJob(kFeedbackPeriodS, [](const StepJob&) {}, [] { return false; });
+  res.success = job.finished && job.success;
+  res.message = job.finished ? job.message
+                             : "stopped after " + std::to_string(job.done) + " steps: the node is shutting down";
+  res.sim_time = job.sim_time;
   publisher_->PublishClock(res.sim_time);  // the final time at once, whatever the clock throttle sent
   return true;
 }
@@ -85,7 +52,7 @@ void SimNode::OnRunStepsGoal(const implicit_sim::RunStepsGoalConstPtr& goal) {
   implicit_sim::RunStepsResult result;
   std::string refusal;
   bool started = false;
-  const bool ran = RunBetweenSteps([&] {
+  const bool ran = mailbox_.RunBetweenSteps([&] {
     result.sim_time = SimTime();
     started = StartJob(goal->steps, kMaxActionSteps, &refusal);
   });
@@ -95,31 +62,21 @@ void SimNode::OnRunStepsGoal(const implicit_sim::RunStepsGoalConstPtr& goal) {
     run_steps_server_->setAborted(result, result.message);
     return;
   }
-  std::unique_lock<std::mutex> lock(mailbox_mutex_);
-  bool cancel_sent = false;
-  while (!job_.finished && !stopping_) {
-    mailbox_cv_.wait_for(lock, std::chrono::duration<double>(kFeedbackPeriodS));
-    if (!cancel_sent && (run_steps_server_->isPreemptRequested() || !ros::ok())) {
-      job_.cancel = true;  // the physics thread takes no further job step
-      cancel_sent = true;
-      if (job_.active) FinishJobLocked(false, "cancelled after " + std::to_string(job_.done) + " steps");
-    }
-    implicit_sim::RunStepsFeedback feedback;
-    feedback.steps_done = job_.done;
-    feedback.sim_time = job_.sim_time;
-    lock.unlock();
-    run_steps_server_->publishFeedback(feedback);
-    lock.lock();
-  }
-  result.steps_done = job_.done;
-  result.sim_time = job_.sim_time;
-  result.success = job_.finished && job_.success;
-  result.message = job_.finished ? job_.message : "stopped: the node is shutting down";
-  if (!job_.finished && job_.active) job_.active = false;
-  job_.finished = false;
-  lock.unlock();
+  const StepJob job = mailbox_.WaitForJob(
+      kFeedbackPeriodS,
+      [this](const StepJob& now) {
+        implicit_sim::RunStepsFeedback feedback;
+        feedback.steps_done = now.done;
+        feedback.sim_time = now.sim_time;
+        run_steps_server_->publishFeedback(feedback);
+      },
+      [this] { return run_steps_server_->isPreemptRequested() || !ros::ok(); });
+  result.steps_done = job.done;
+  result.sim_time = job.sim_time;
+  result.success = job.finished && job.success;
+  result.message = job.finished ? job.message : "stopped: the node is shutting down";
   publisher_->PublishClock(result.sim_time);
-  if (cancel_sent) {
+  if (job.cancel) {
     run_steps_server_->setPreempted(result, result.message);
   } else if (result.success) {
     run_steps_server_->setSucceeded(result, result.message);

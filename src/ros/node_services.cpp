@@ -1,7 +1,8 @@
 // The node's services and command topics: pause, unpause, reset, body state, wrenches (~apply_body_wrench,
-// ~wrench_cmd, ~clear_body_wrenches) and joint efforts (~set_joint_efforts, ~joint_effort_cmd; they enter the step
-// as the wrench of AddJointEffortWrench, core joints.h). Each runs on the physics thread between two steps
-// (RunBetweenSteps; the command topics PostBetweenSteps without waiting); ~get_body_state reads the latest snapshot.
+// ~wrench_cmd, ~clear_body_wrenches), joint efforts (~set_joint_efforts, ~joint_effort_cmd) and drives
+// (~joint_command, ~joint_trajectory); what each does to the world is in world_commands.h. Each runs on the physics
+// thread between two steps (the command topics without waiting); ~get_body_state reads the latest snapshot. The
+// command topics' messages take one path, received or replayed from a journal: journaled, applied, counted.
 #include "implicit_sim/ros/sim_node.h"  // first: its generated service type Step precedes the core's function Step
 
 #include <algorithm>
@@ -14,30 +15,55 @@
 
 namespace implicit_sim {
 namespace conv = ros_conversions;
-namespace {
+const SimNode::CommandInput<implicit_sim::BodyWrench> SimNode::kWrenchInput{
+    "~wrench_cmd", JournalInput::kWrenchCommand, CommandTopic::kWrench, &SetWrenchCommand, false};
+const SimNode::CommandInput<sensor_msgs::JointState> SimNode::kJointEffortInput{
+    "~joint_effort_cmd", JournalInput::kJointEffortCommand, CommandTopic::kJointEffort, &SetJointEffortCommand, true};
+const SimNode::CommandInput<implicit_sim::JointCommand> SimNode::kJointCommandInput{
+    "~joint_command", JournalInput::kJointCommand, CommandTopic::kJointDrive, &SetJointDrives, true};
+const SimNode::CommandInput<trajectory_msgs::JointTrajectory> SimNode::kJointTrajectoryInput{
+    "~joint_trajectory", JournalInput::kJointTrajectory, CommandTopic::kJointDrive, &StartTrajectory, false};
 
-// Sets *error when a commanded force (N) or torque (N m) is non-finite or larger than kMaxCommand.
-bool CheckWrenchValues(const Vec3& force, const Vec3& torque, std::string* error) {
-  if (!force.allFinite() || !torque.allFinite()) {
-    *error = "wrench must be finite";
-  } else if (force.norm() > kMaxCommand || torque.norm() > kMaxCommand) {
-    *error = "wrench too large: |force| and |torque| must be <= 1e9 (N, N m)";
-  } else {
-    return true;
-  }
-  return false;
+template <typename Message>
+ros::Subscriber SimNode::SubscribeCommand(const std::string& name, uint32_t queue, const CommandInput<Message>& input) {
+  return pnh_.subscribe<Message>(
+      name, queue, boost::function<void(const typename Message::ConstPtr&)>([this, &input](const auto& msg) {
+        mailbox_.Post([this, &input, msg] {
+          journal_->Record(step_count_, input.journal, *msg);
+          ApplyCommand(*msg, input);
+        });
+      }));
 }
 
-}  // namespace
+template <typename Message>
+void SimNode::ApplyCommand(const Message& msg, const CommandInput<Message>& input) {
+  std::string error;
+  const bool accepted = input.apply(Context(), msg, world_.get(), &error);
+  if (accepted && input.save_snapshot) SaveSnapshot();
+  diagnostics_->CountCommand(input.counter, input.topic, accepted, error);
+}
 
-const SimNode::CommandInput<implicit_sim::BodyWrench> SimNode::kWrenchInput{
-    "~wrench_cmd", JournalInput::kWrenchCommand, CommandTopic::kWrench, &SimNode::ApplyWrenchCommand};
-const SimNode::CommandInput<sensor_msgs::JointState> SimNode::kJointEffortInput{
-    "~joint_effort_cmd", JournalInput::kJointEffortCommand, CommandTopic::kJointEffort, &SimNode::ApplyJointEfforts};
-const SimNode::CommandInput<implicit_sim::JointCommand> SimNode::kJointCommandInput{
-    "~joint_command", JournalInput::kJointCommand, CommandTopic::kJointDrive, &SimNode::ApplyJointCommand};
-const SimNode::CommandInput<trajectory_msgs::JointTrajectory> SimNode::kJointTrajectoryInput{
-    "~joint_trajectory", JournalInput::kJointTrajectory, CommandTopic::kJointDrive, &SimNode::StartTrajectory};
+bool SimNode::ApplyJournalRecord(const JournalRecord& record, std::string* refusal) {
+  switch (record.kind) {
+    case JournalInput::kWrenchCommand:
+      ApplyCommand(record.Decode<implicit_sim::BodyWrench>(), kWrenchInput);
+      return true;
+    case JournalInput::kJointCommand:
+      ApplyCommand(record.Decode<implicit_sim::JointCommand>(), kJointCommandInput);
+      return true;
+    case JournalInput::kJointEffortCommand:
+      ApplyCommand(record.Decode<sensor_msgs::JointState>(), kJointEffortInput);
+      return true;
+    case JournalInput::kJointTrajectory:
+      ApplyCommand(record.Decode<trajectory_msgs::JointTrajectory>(), kJointTrajectoryInput);
+      return true;
+    case JournalInput::kUnreplayable:
+      break;
+  }
+  *refusal = "the journal's input " + record.Text() + " before step " + std::to_string(record.step) +
+             " cannot be replayed";
+  return false;
+}
 
 void SimNode::AdvertiseServices() {
   services_.push_back(pnh_.advertiseService("pause", &SimNode::OnPause, this));
@@ -60,20 +86,8 @@ void SimNode::AdvertiseServices() {
       pnh_, "run_steps", [this](const implicit_sim::RunStepsGoalConstPtr& goal) { OnRunStepsGoal(goal); }, false);
 }
 
-int SimNode::FindBodyOrFail(const std::string& name, bool must_move, std::string* error) const {
-  const Model& model = *world_->model;
-  const int b = model.FindBody(name);
-  if (b < 0) {
-    *error = "unknown body '" + name + "'";
-  } else if (must_move && model.bodies[b].is_fixed) {
-    *error = "body '" + name + "' is fixed";
-    return -1;
-  }
-  return b;
-}
-
 bool SimNode::OnPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  return RunBetweenSteps([&] {
+  return mailbox_.RunBetweenSteps([&] {
            paused_ = true;
            diagnostics_->SetPaused(true);
            res.success = true;
@@ -82,9 +96,8 @@ bool SimNode::OnPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& 
 }
 
 bool SimNode::OnUnpause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  return RunBetweenSteps([&] {
-           std::lock_guard<std::mutex> lock(mailbox_mutex_);
-           if (job_.active) {
+  return mailbox_.RunBetweenSteps([&] {
+           if (mailbox_.JobActive()) {
              res.success = false;
              res.message = "refused: a ~step or ~run_steps job is running";
              return;
@@ -98,7 +111,7 @@ bool SimNode::OnUnpause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response
 }
 
 bool SimNode::OnReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  return RunBetweenSteps([&] {
+  return mailbox_.RunBetweenSteps([&] {
            ResetWorld();
            JournalUnreplayable("~reset");
            diagnostics_->ClearFault();
@@ -108,7 +121,7 @@ bool SimNode::OnReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& 
 }
 
 bool SimNode::OnClearWrenches(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  return RunBetweenSteps([&] {
+  return mailbox_.RunBetweenSteps([&] {
            const size_t n = world_->wrenches.size();
            world_->wrenches.clear();
            world_->commanded_W.setZero();
@@ -129,9 +142,9 @@ bool SimNode::OnGetBodyState(implicit_sim::GetBodyState::Request& req, implicit_
 }
 
 bool SimNode::OnSetBodyState(implicit_sim::SetBodyState::Request& req, implicit_sim::SetBodyState::Response& res) {
-  return RunBetweenSteps([&] {
+  return mailbox_.RunBetweenSteps([&] {
            std::string error;
-           const int b = FindBodyOrFail(req.state.name, true, &error);
+           const int b = FindBodyOrFail(*world_->model, req.state.name, true, &error);
            res.success =
                b >= 0 && conv::SetBodyStateFromMsg(*world_->model, b, req.state, &world_->state, &error);
            if (res.success) {
@@ -145,81 +158,28 @@ bool SimNode::OnSetBodyState(implicit_sim::SetBodyState::Request& req, implicit_
 
 bool SimNode::OnApplyWrench(implicit_sim::ApplyBodyWrench::Request& req,
                             implicit_sim::ApplyBodyWrench::Response& res) {
-  return RunBetweenSteps([&] {
+  return mailbox_.RunBetweenSteps([&] {
            std::string error;
-           res.success = false;
-           const int b = FindBodyOrFail(req.body, true, &error);
-           int frame_body = -1;
-           if (!req.reference_frame.empty() && req.reference_frame != params_.world_frame) {
-             frame_body = world_->model->FindBody(req.reference_frame);
-             if (frame_body < 0) error = "unknown reference_frame '" + req.reference_frame + "'";
-           }
-           TimedWrench w{b, frame_body, conv::ToVec3(req.reference_point), conv::ToVec3(req.wrench.force),
-                         conv::ToVec3(req.wrench.torque), std::max(req.start_time, SimTime()), -1.0};
-           if (error.empty() &&
-               (!w.point.allFinite() || !std::isfinite(req.start_time) || !std::isfinite(req.duration))) {
-             error = "reference_point, start_time and duration must be finite";
-           }
-           if (error.empty()) CheckWrenchValues(w.force, w.torque, &error);  // sets error when refused
-           if (error.empty() && req.duration == 0.0) error = "duration must be > 0 s, or < 0 for until cleared";
-           if (!error.empty()) {
+           res.success = AddTimedWrench(Context(), req, world_.get(), &error);
+           if (!res.success) {
              res.message = error;
              return;
            }
-           if (req.duration > 0.0) w.end = w.start + req.duration;
-           world_->wrenches.push_back(w);
            JournalUnreplayable("~apply_body_wrench");
            res.success = true;
-           res.message = "wrench on '" + req.body + "' from t = " + FormatNumber(w.start) + " s";
+           res.message = "wrench on '" + req.body + "' from t = " + FormatNumber(world_->wrenches.back().start) + " s";
          }) || ShuttingDownAnswer(res);
-}
-
-bool SimNode::ApplyWrenchCommand(const implicit_sim::BodyWrench& msg, std::string* error) {
-  const Vec3 f = conv::ToVec3(msg.wrench.force), tau = conv::ToVec3(msg.wrench.torque);
-  const int b = FindBodyOrFail(msg.body, true, error);
-  if (b < 0 || !CheckWrenchValues(f, tau, error)) return false;
-  const int v = Model::v_offset(world_->model->velocity_slot[b]);
-  world_->commanded_W.segment<3>(v) = f;
-  world_->commanded_W.segment<3>(v + 3) = tau;
-  return true;
-}
-
-bool SimNode::SetJointEfforts(const std::vector<std::string>& names, const std::vector<double>& efforts,
-                              std::string* error) {
-  const Model& model = *world_->model;
-  if (names.size() != efforts.size()) {
-    *error = "name and effort must have the same length (" + std::to_string(names.size()) + " names, " +
-             std::to_string(efforts.size()) + " efforts)";
-    return false;
-  }
-  std::vector<int> joints(names.size());
-  for (size_t i = 0; i < names.size(); ++i) {
-    joints[i] = model.FindJoint(names[i]);
-    if (joints[i] < 0 || !model.joints[joints[i]].has_coordinate()) {
-      *error = "no revolute, continuous or prismatic joint '" + names[i] + "' in the scene";
-      return false;
-    }
-    if (!std::isfinite(efforts[i]) || std::abs(efforts[i]) > kMaxCommand) {
-      *error = "effort of joint '" + names[i] + "' = " + FormatNumber(efforts[i]) +
-               " must be finite with |effort| <= 1e9 (N m or N)";
-      return false;
-    }
-  }
-  for (size_t i = 0; i < names.size(); ++i) world_->joint_efforts[joints[i]] = efforts[i];
-  SaveSnapshot();  // /joint_states shows the new efforts
-  return true;
-}
-
-bool SimNode::ApplyJointEfforts(const sensor_msgs::JointState& msg, std::string* error) {
-  return SetJointEfforts(msg.name, msg.effort, error);
 }
 
 bool SimNode::OnSetJointEfforts(implicit_sim::SetJointEfforts::Request& req,
                                 implicit_sim::SetJointEfforts::Response& res) {
-  return RunBetweenSteps([&] {
+  return mailbox_.RunBetweenSteps([&] {
            std::string error;
-           res.success = SetJointEfforts(req.name, req.effort, &error);
-           if (res.success) JournalUnreplayable("~set_joint_efforts");
+           res.success = SetJointEfforts(req.name, req.effort, world_.get(), &error);
+           if (res.success) {
+             JournalUnreplayable("~set_joint_efforts");
+             SaveSnapshot();  // /joint_states shows the new efforts
+           }
            res.message = res.success ? "set the effort of " + std::to_string(req.name.size()) + " joints" : error;
          }) || ShuttingDownAnswer(res);
 }

@@ -75,7 +75,7 @@ bool SimNode::OnSpawn(implicit_sim::Spawn::Request& req, implicit_sim::Spawn::Re
   }
   addition.urdf = addition_text.urdf;
   addition.base_dir = addition_text.dir;
-  return RunBetweenSteps([&] {
+  return mailbox_.RunBetweenSteps([&] {
            res.success = false;
            try {
              std::vector<std::string> added;
@@ -100,7 +100,7 @@ bool SimNode::OnSpawn(implicit_sim::Spawn::Request& req, implicit_sim::Spawn::Re
 }
 
 bool SimNode::OnDelete(implicit_sim::Delete::Request& req, implicit_sim::Delete::Response& res) {
-  return RunBetweenSteps([&] {
+  return mailbox_.RunBetweenSteps([&] {
            res.success = false;
            try {
              std::vector<std::string> removed;
@@ -133,7 +133,7 @@ bool SimNode::OnLoadScene(implicit_sim::LoadScene::Request& req, implicit_sim::L
     res.message = e.what();
     return true;
   }
-  return RunBetweenSteps([&] {
+  return mailbox_.RunBetweenSteps([&] {
            time_offset_ = SimTime();  // simulation time goes on from where it was
            next->state.t = 0.0;
            const std::string name = next->model->scene_name;

@@ -1,6 +1,6 @@
-// The node's core: construction, the mailbox, the physics, publish and diagnostics threads, and stepping with the
-// applied wrenches. Only the physics thread touches world_; the others post commands to it (RunBetweenSteps,
-// PostBetweenSteps) or read the snapshot it saves (Latest), so no lock is held across a step.
+// The node's core: construction, the physics, publish and diagnostics threads, and stepping with the commanded
+// wrenches. Only the physics thread touches world_; the others post commands to it (mailbox_) or read the snapshot it
+// saves (NodePublisher::Latest), so no lock is held across a step.
 #include "implicit_sim/ros/sim_node.h"  // first: its generated service type Step precedes the core's function Step
 
 #include <chrono>
@@ -11,9 +11,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include "implicit_sim/core/model/joints.h"
-#include "implicit_sim/core/model/wrench.h"
-#include "implicit_sim/ros/conversions.h"
+#include "implicit_sim/core/step/time_stepper.h"
 
 namespace implicit_sim {
 namespace {
@@ -30,27 +28,26 @@ constexpr double kMaxPaceLagS = 0.1;
 }  // namespace
 
 SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
-    : nh_(nh),
-      pnh_(pnh),
-      params_(NodeParams::Read(pnh)),
-      options_(params_.options),
-      live_(params_.live),
-      live_options_(params_.options) {
+    : nh_(nh), pnh_(pnh), params_(NodeParams::Read(pnh)), options_(params_.options) {
   world_ = BuildWorld(params_, ReadNodeScene(nh, params_));
-  OpenJournals();
+  journal_ = std::make_unique<NodeJournal>(params_.input_journal, params_.replay_journal);
   PublishRobotDescription(world_->urdf);
   const Model& model = *world_->model;
   paused_ = params_.paused;
+  live_ = std::make_unique<LiveTuning>(pnh, params_.live, params_.options, [this] {
+    mailbox_.Post([this] { JournalUnreplayable("~set_parameters"); });
+  });
   diagnostics_ = std::make_unique<NodeDiagnostics>(nh, pnh, "implicit_sim " + model.scene_name, paused_);
+  drag_markers_ = std::make_unique<DragMarkers>(pnh, params_.world_frame, params_.interactive_markers,
+                                                [this](const DragMarkers::Feedback& f) { OnDragFeedback(f); });
   publisher_ = std::make_unique<NodePublisher>(
-      nh, pnh, params_, [this] { return Live(); },
-      [this](const NodeSnapshot& snapshot) { SetUpDragMarkers(*snapshot.model, snapshot.state); },
-      [this](const NodeSnapshot& snapshot) { UpdateDragMarkers(snapshot); });
+      nh, pnh, params_, [this] { return live_->Live(); },
+      [this](const NodeSnapshot& snapshot) { drag_markers_->SetUp(*snapshot.model, snapshot.state); },
+      [this](const NodeSnapshot& snapshot) { drag_markers_->Follow(snapshot); });
   SaveSnapshot();
   AdvertiseServices();
   publisher_->PublishStaticTf(model);
-  SetUpReconfigure();
-  SetUpDragMarkers(model, world_->state);
+  drag_markers_->SetUp(model, world_->state);
   ROS_INFO("implicit_sim: scene '%s', %d moving bodies, %zu contact pairs, h = %g s, %s", model.scene_name.c_str(),
            model.num_moving(), model.pairs.size(), options_.h, paused_ ? "paused" : "running");
 }
@@ -58,7 +55,7 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
 SimNode::~SimNode() {
   if (run_steps_server_) run_steps_server_->shutdown();
   StopThreads(std::numeric_limits<double>::infinity());
-  drag_server_.reset();
+  drag_markers_.reset();
 }
 
 void SimNode::Run() {
@@ -94,11 +91,8 @@ void SimNode::StartThread(std::thread* thread, void (SimNode::*loop)()) {
 }
 
 bool SimNode::StopThreads(double grace_s) {
-  {
-    std::lock_guard<std::mutex> lock(mailbox_mutex_);  // the waiters of commands and jobs check stopping_ under it
-    stopping_ = true;
-  }
-  mailbox_cv_.notify_all();
+  stopping_ = true;
+  mailbox_.Stop();
   {
     std::unique_lock<std::mutex> lock(stop_mutex_);
     stop_cv_.notify_all();
@@ -115,72 +109,21 @@ bool SimNode::StopThreads(double grace_s) {
   return true;
 }
 
-bool SimNode::RunBetweenSteps(std::function<void()> fn) {
-  auto command = std::make_shared<Command>();
-  command->run = std::move(fn);
-  std::unique_lock<std::mutex> lock(mailbox_mutex_);
-  if (stopping_) return false;
-  commands_.push_back(command);
-  mailbox_cv_.notify_all();
-  mailbox_cv_.wait(lock, [&] { return command->done || stopping_; });
-  return command->done;
-}
-
-void SimNode::PostBetweenSteps(std::function<void()> fn) {
-  auto command = std::make_shared<Command>();
-  command->run = std::move(fn);
-  std::lock_guard<std::mutex> lock(mailbox_mutex_);
-  commands_.push_back(command);
-  mailbox_cv_.notify_all();
-}
-
-void SimNode::RunCommands() {
-  std::vector<std::shared_ptr<Command>> commands;
-  {
-    std::lock_guard<std::mutex> lock(mailbox_mutex_);
-    commands.swap(commands_);
-  }
-  if (commands.empty()) return;
-  for (const auto& command : commands) command->run();
-  {
-    std::lock_guard<std::mutex> lock(mailbox_mutex_);
-    for (const auto& command : commands) command->done = true;
-  }
-  mailbox_cv_.notify_all();
-}
-
-void SimNode::ComputeWrenches() {
-  UpdateTrajectoryDrives();
-  World& w = *world_;
-  const Model& model = *w.model;
-  w.wrench_W.setZero();
-  const double t = SimTime() + 1e-9;
-  for (int k = 0; k < model.num_moving(); ++k) {  // ~wrench_cmd: at the link origin, world frame
-    const int b = model.moving_bodies[k];
-    const int v = Model::v_offset(k);
-    AddWrenchAtPoint(model, w.state, b, -1, w.state.X_WL(model, b).translation(), w.commanded_W.segment<3>(v),
-                     w.commanded_W.segment<3>(v + 3), &w.wrench_W);
-  }
-  for (const TimedWrench& tw : w.wrenches) {
-    if (t < tw.start || (tw.end >= 0.0 && t >= tw.end)) continue;
-    AddWrenchAtPoint(model, w.state, tw.body, tw.frame_body, tw.point, tw.force, tw.torque, &w.wrench_W);
-  }
-  if (!model.joints.empty()) AddJointEffortWrench(model, w.state, w.joint_efforts, &w.wrench_W);
-  AddDragWrenches();
+CommandContext SimNode::Context() const {
+  return CommandContext{SimTime(), live_->Live(), params_.world_frame};
 }
 
 void SimNode::StepOnce(double rtf) {
-  {
-    std::lock_guard<std::mutex> lock(live_mutex_);
-    options_.newton.tolerance = live_options_.newton.tolerance;
-    options_.newton.max_iterations = live_options_.newton.max_iterations;
-  }
+  live_->CopySolverOptions(&options_);
   std::string replay_refusal;
-  if (replay_ && !ReplayJournalInputs(&replay_refusal)) {
+  if (journal_->replaying() &&
+      !journal_->Replay(
+          step_count_, [this](const JournalRecord& r, std::string* refusal) { return ApplyJournalRecord(r, refusal); },
+          &replay_refusal)) {
     RefuseReplayStep(replay_refusal);
     return;
   }
-  ComputeWrenches();
+  ComputeStepWrench(Context(), options_.h, world_.get());
   World& w = *world_;
   StepReport report;
   try {
@@ -207,11 +150,7 @@ void SimNode::StepOnce(double rtf) {
     }
   }
   diagnostics_->CountStep(report, failure, paused_, SimTime(), rtf);
-  if (!report.advanced) {
-    std::lock_guard<std::mutex> lock(mailbox_mutex_);
-    job_.sim_time = SimTime();
-    if (job_.active) FinishJobLocked(false, "stopped after " + std::to_string(job_.done) + " steps: " + failure);
-  }
+  if (!report.advanced) mailbox_.FailJob(SimTime(), failure);
   SaveSnapshot();
   publisher_->PublishClockThrottled(SimTime(), !report.advanced);
   publisher_->PublishStepStats(report, SimTime(), step_count_, rtf);
@@ -222,31 +161,25 @@ void SimNode::RefuseReplayStep(const std::string& refusal) {
   paused_ = true;
   ROS_ERROR("implicit_sim: replay stops: %s; the simulation is paused", refusal.c_str());
   diagnostics_->HoldFault(refusal);
-  std::lock_guard<std::mutex> lock(mailbox_mutex_);
-  if (job_.active) FinishJobLocked(false, "stopped after " + std::to_string(job_.done) + " steps: " + refusal);
+  mailbox_.FailJob(SimTime(), refusal);
 }
 
 void SimNode::ResetWorld() {
-  World& w = *world_;
   time_offset_ = SimTime();  // simulation time keeps increasing; bodies return to their initial state
-  w.state = w.initial_state;
-  ClearWarmStart(w.data.get());
-  // No forces, but the vector keeps its size: it follows the core's pair layout (Data::LayOut), and a step whose
-  // layout is unchanged writes its results into it by index (clearing it made them vanish after ~reset).
-  for (ContactResult& contact : w.data->contacts) {
-    const int pair = contact.pair;
-    contact = ContactResult();
-    contact.pair = pair;
-  }
-  w.wrenches.clear();
-  w.commanded_W.setZero();
-  w.joint_efforts.setZero();
-  std::fill(w.data->joint_drives.begin(), w.data->joint_drives.end(), JointDrive());
-  w.trajectories.clear();
-  w.drags.clear();
+  ResetWorldState(world_.get());
   restart_pacing_ = true;
   stepped_ = false;
   SaveSnapshot();
+}
+
+void SimNode::OnDragFeedback(const DragMarkers::Feedback& feedback) {
+  mailbox_.Post([this, feedback] {
+    const DragEvent event = ApplyDragFeedback(*feedback, world_.get());
+    if (event == DragEvent::kGrab) JournalUnreplayable("~drag");
+    if (event == DragEvent::kGrab || event == DragEvent::kRelease) {
+      drag_markers_->SetDragged(feedback->marker_name, event == DragEvent::kGrab);
+    }
+  });
 }
 
 void SimNode::SaveSnapshot() {
@@ -270,19 +203,14 @@ void SimNode::PhysicsLoop() {
   WallClock::time_point pace_wall, rtf_wall = WallClock::now();
   double pace_sim = 0.0, rtf_sim = 0.0, pace_factor = -1.0;
   while (true) {
-    bool run_job = false;
-    {
-      std::unique_lock<std::mutex> lock(mailbox_mutex_);
-      mailbox_cv_.wait(lock, [this] { return stopping_ || !commands_.empty() || !paused_ || JobRunnableLocked(); });
-      if (stopping_) return;
-      run_job = JobRunnableLocked();
-    }
-    RunCommands();
-    if (run_job) {
-      RunJobStep();
+    const PhysicsMailbox::Work work = mailbox_.WaitForWork(!paused_);
+    if (work == PhysicsMailbox::Work::kStop) return;
+    if (work == PhysicsMailbox::Work::kJobStep) {
+      StepOnce(0.0);  // a refused step ends the job itself
+      mailbox_.CountJobStep(SimTime());
       continue;
     }
-    if (paused_ || stopping_) continue;
+    if (paused_) continue;
     if (restart_pacing_) {
       pace_wall = rtf_wall = WallClock::now();
       pace_sim = rtf_sim = SimTime();
@@ -297,7 +225,7 @@ void SimNode::PhysicsLoop() {
       rtf_sim = sim;
       rtf_wall = now;
     }
-    const double real_time_factor = Live().real_time_factor;
+    const double real_time_factor = live_->Live().real_time_factor;
     if (real_time_factor != pace_factor) {  // a new factor paces from now on
       pace_factor = real_time_factor;
       pace_wall = now;
@@ -310,22 +238,12 @@ void SimNode::PhysicsLoop() {
         pace_wall = now;
         pace_sim = sim;
       } else {
-        WaitForPace(due);
+        // Until the step is due, the commands that arrive run at once: a stream of commands must neither wait for
+        // the next step nor make the simulation run ahead of the wall clock. ~pause, ~reset or a new world end the
+        // wait: the loop decides what comes next.
+        mailbox_.RunUntil(due, [this] { return paused_ || restart_pacing_; });
       }
     }
-  }
-}
-
-// Sleeps until `until`, the wall time at which the simulation is due, running the commands that arrive meanwhile:
-// a stream of commands must neither wait for the next step nor make the simulation run ahead of the wall clock.
-void SimNode::WaitForPace(std::chrono::steady_clock::time_point until) {
-  std::unique_lock<std::mutex> lock(mailbox_mutex_);
-  while (mailbox_cv_.wait_until(lock, until, [this] { return stopping_ || !commands_.empty(); })) {
-    if (stopping_) return;
-    lock.unlock();
-    RunCommands();
-    lock.lock();
-    if (paused_ || restart_pacing_) return;  // ~pause, ~reset or a new world: the loop decides what comes next
   }
 }
 
@@ -334,8 +252,8 @@ void SimNode::WaitForPace(std::chrono::steady_clock::time_point until) {
 void SimNode::PublishLoop() {
   WallClock::time_point next = WallClock::now();
   while (!stopping_) {
-    const auto period =
-        std::chrono::duration_cast<WallClock::duration>(std::chrono::duration<double>(1.0 / Live().publish_rate));
+    const std::chrono::duration<double> period_s(1.0 / live_->Live().publish_rate);
+    const auto period = std::chrono::duration_cast<WallClock::duration>(period_s);
     publisher_->Cycle();
     next += period;
     const WallClock::time_point now = WallClock::now();

@@ -24,7 +24,7 @@ struct TimedWrench {
   double start, end;   // simulation time (s); end < 0: until cleared
 };
 
-// A mouse drag (node_drag.cpp): a spring from the grabbed point G of a body to the target the marker gives.
+// A mouse drag (world_commands.h ApplyDragFeedback): a spring from the grabbed point G of a body to the target the marker gives.
 struct DragSpring {
   int body;
   Vec3 p_LG;      // the grabbed point in the body's link frame (m)
@@ -32,7 +32,7 @@ struct DragSpring {
   Vec3 p_GM_W;    // from the grabbed point to the marker origin at the grab, world frame (m)
 };
 
-// A ~joint_trajectory being followed (node_drives.cpp); times in s, positions in rad or m.
+// A ~joint_trajectory being followed (world_drives.cpp); times in s, positions in rad or m.
 struct Trajectory {
   std::vector<int> joints;  // model joints; -1 where a later command took the joint over
   double start = 0.0;       // simulation time of time_from_start = 0 (s)

@@ -1,9 +1,8 @@
-// Joint drives through the node: ~joint_command (implicit_sim/JointCommand: targets and gains per joint) and
+// Joint drives of the World: ~joint_command (implicit_sim/JointCommand: targets and gains per joint) and
 // ~joint_trajectory (trajectory_msgs/JointTrajectory, interpolated in simulation time with the ~drive_stiffness and
-// ~drive_damping gains). Both set Data::joint_drives, the core's implicit PD drives (core/model/joints.h JointDrive),
-// on the physics thread; a message is applied whole or dropped whole with a throttled warning and counted in
-// /diagnostics (received_drive_commands, dropped_drive_commands).
-#include "implicit_sim/ros/sim_node.h"  // first: its generated service type Step precedes the core's function Step
+// ~drive_damping gains). Both set Data::joint_drives, the core's implicit PD drives (core/model/joints.h JointDrive);
+// a message is applied whole or refused whole (the node warns and counts it in /diagnostics).
+#include "implicit_sim/ros/world_commands.h"
 
 #include <algorithm>
 #include <cmath>
@@ -47,18 +46,29 @@ void Hermite(double p0, double v0, double p1, double v1, double T, double s, dou
   *v = ((6 * u2 - 6 * u) * p0 + (3 * u2 - 4 * u + 1) * T * v0 + (-6 * u2 + 6 * u) * p1 + (3 * u2 - 2 * u) * T * v1) / T;
 }
 
+// Ends the following of `joint` by every trajectory (a later command took it over).
+void StopTrajectoryOf(int joint, World* world) {
+  for (Trajectory& trajectory : world->trajectories) {
+    for (int& j : trajectory.joints) {
+      if (j == joint) j = -1;
+    }
+  }
+}
+
 }  // namespace
 
-bool SimNode::ApplyJointCommand(const implicit_sim::JointCommand& msg, std::string* error) {
-  const Model& model = *world_->model;
+bool SetJointDrives(const CommandContext& context, const implicit_sim::JointCommand& msg, World* world,
+                    std::string* error) {
+  const Model& model = *world->model;
   const size_t n = msg.name.size();
   std::vector<int> joints;
-  if (!SameLengthOrEmpty(msg.position, n, "position", error) || !SameLengthOrEmpty(msg.velocity, n, "velocity", error) ||
-      !SameLengthOrEmpty(msg.stiffness, n, "stiffness", error) || !SameLengthOrEmpty(msg.damping, n, "damping", error) ||
-      !FindDrivenJoints(model, msg.name, &joints, error)) {
+  if (!SameLengthOrEmpty(msg.position, n, "position", error) ||
+      !SameLengthOrEmpty(msg.velocity, n, "velocity", error) ||
+      !SameLengthOrEmpty(msg.stiffness, n, "stiffness", error) ||
+      !SameLengthOrEmpty(msg.damping, n, "damping", error) || !FindDrivenJoints(model, msg.name, &joints, error)) {
     return false;
   }
-  const LiveParams live = Live();
+  const LiveParams& live = context.live;
   std::vector<JointDrive> drives(n);
   for (size_t i = 0; i < n; ++i) {
     JointDrive& d = drives[i];
@@ -69,27 +79,19 @@ bool SimNode::ApplyJointCommand(const implicit_sim::JointCommand& msg, std::stri
     if (!CheckJointDrive(model.joints[joints[i]], d, error)) return false;
   }
   for (size_t i = 0; i < n; ++i) {
-    world_->data->joint_drives[joints[i]] = drives[i];
-    StopTrajectoryOf(joints[i]);
+    world->data->joint_drives[joints[i]] = drives[i];
+    StopTrajectoryOf(joints[i], world);
   }
-  SaveSnapshot();
   return true;
 }
 
-void SimNode::StopTrajectoryOf(int joint) {
-  for (Trajectory& trajectory : world_->trajectories) {
-    for (int& j : trajectory.joints) {
-      if (j == joint) j = -1;  // that joint no longer follows it
-    }
-  }
-}
-
-bool SimNode::StartTrajectory(const trajectory_msgs::JointTrajectory& msg, std::string* error) {
-  const Model& model = *world_->model;
+bool StartTrajectory(const CommandContext& context, const trajectory_msgs::JointTrajectory& msg, World* world,
+                     std::string* error) {
+  const Model& model = *world->model;
   Trajectory trajectory;
   if (!FindDrivenJoints(model, msg.joint_names, &trajectory.joints, error)) return false;
   const size_t n = msg.joint_names.size();
-  const LiveParams live = Live();
+  const LiveParams& live = context.live;
   trajectory.stiffness = live.drive_stiffness;
   trajectory.damping = live.drive_damping;
   if (n == 0 || msg.points.empty()) {
@@ -101,7 +103,7 @@ bool SimNode::StartTrajectory(const trajectory_msgs::JointTrajectory& msg, std::
     return false;
   }
   // Stamp 0: start now (the JointTrajectory convention); otherwise at the stamp's simulation time.
-  trajectory.start = msg.header.stamp.isZero() ? SimTime() : msg.header.stamp.toSec();
+  trajectory.start = msg.header.stamp.isZero() ? context.sim_time : msg.header.stamp.toSec();
   double last = -1.0;
   for (size_t k = 0; k < msg.points.size(); ++k) {
     const trajectory_msgs::JointTrajectoryPoint& point = msg.points[k];
@@ -129,16 +131,15 @@ bool SimNode::StartTrajectory(const trajectory_msgs::JointTrajectory& msg, std::
   }
   // The joints start from where they are: the segment before the first point begins at the current positions.
   for (int j : trajectory.joints) {
-    trajectory.from.push_back(JointPosition(model, world_->state, j));
-    StopTrajectoryOf(j);
+    trajectory.from.push_back(JointPosition(model, world->state, j));
+    StopTrajectoryOf(j, world);
   }
-  world_->trajectories.push_back(std::move(trajectory));
+  world->trajectories.push_back(std::move(trajectory));
   return true;
 }
 
-void SimNode::UpdateTrajectoryDrives() {
-  World& w = *world_;
-  const double t_end = SimTime() + options_.h;  // drives act at the end of the step
+void UpdateTrajectoryDrives(double t_end, World* world) {
+  World& w = *world;
   for (const Trajectory& trajectory : w.trajectories) {
     const double s = t_end - trajectory.start;  // s since the trajectory's start
     const auto& times = trajectory.times;

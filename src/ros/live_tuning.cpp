@@ -1,11 +1,6 @@
-// Live tuning through dynamic_reconfigure (cfg/SimNode.cfg): the live parameters (LiveParams) and the solver's
-// tolerance and iteration limit. A value that is NaN, Inf, out of its range or (max_iterations) not an integer is
-// refused with a warning naming it and its range, and the previous value is kept (and sent back to the client).
-#include "implicit_sim/ros/sim_node.h"  // first: its generated service type Step precedes the core's function Step
+#include "implicit_sim/ros/live_tuning.h"
 
 #include <stdexcept>
-
-#include "implicit_sim/core/step/options.h"
 
 namespace implicit_sim {
 namespace {
@@ -44,26 +39,34 @@ void Refuse(const std::string& error) {
 
 }  // namespace
 
-LiveParams SimNode::Live() const {
-  std::lock_guard<std::mutex> lock(live_mutex_);
+LiveTuning::LiveTuning(ros::NodeHandle pnh, const LiveParams& live, const StepperOptions& options,
+                       std::function<void()> on_physics_change)
+    : live_(live), options_(options), on_physics_change_(std::move(on_physics_change)) {
+  server_ = std::make_unique<dynamic_reconfigure::Server<SimNodeConfig>>(server_mutex_, pnh);
+  SimNodeConfig config;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    FillConfig(live_, options_, &config);
+  }
+  server_->updateConfig(config);
+  server_->setCallback([this](SimNodeConfig& next, uint32_t) { OnReconfigure(next); });
+}
+
+LiveParams LiveTuning::Live() const {
+  std::lock_guard<std::mutex> lock(mutex_);
   return live_;
 }
 
-void SimNode::SetUpReconfigure() {
-  reconfigure_ = std::make_unique<dynamic_reconfigure::Server<SimNodeConfig>>(reconfigure_mutex_, pnh_);
-  SimNodeConfig config;
-  {
-    std::lock_guard<std::mutex> lock(live_mutex_);
-    FillConfig(live_, live_options_, &config);
-  }
-  reconfigure_->updateConfig(config);
-  reconfigure_->setCallback([this](SimNodeConfig& next, uint32_t) { OnReconfigure(next); });
+void LiveTuning::CopySolverOptions(StepperOptions* options) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  options->newton.tolerance = options_.newton.tolerance;
+  options->newton.max_iterations = options_.newton.max_iterations;
 }
 
-void SimNode::OnReconfigure(SimNodeConfig& next) {
-  std::lock_guard<std::mutex> lock(live_mutex_);
+void LiveTuning::OnReconfigure(SimNodeConfig& next) {
+  std::lock_guard<std::mutex> lock(mutex_);
   const LiveParams live_before = live_;
-  const StepperOptions options_before = live_options_;
+  const StepperOptions options_before = options_;
   for (const LiveParamRange& range : LiveParamRanges()) {
     const double value = *ConfigField(&next, range.name);
     if (value == live_.*range.field) continue;
@@ -77,23 +80,23 @@ void SimNode::OnReconfigure(SimNodeConfig& next) {
   std::string error;
   const OptionRow& tolerance = SolverRow("tolerance");
   if (CheckOptionValue(tolerance, next.tolerance, "parameter ~tolerance", &error)) {
-    tolerance.set(&live_options_, next.tolerance);
+    tolerance.set(&options_, next.tolerance);
   } else {
     Refuse(error);
   }
   const OptionRow& max_iterations = SolverRow("max_iterations");
   if (CheckOptionValue(max_iterations, next.max_iterations, "parameter ~max_iterations", &error)) {
-    max_iterations.set(&live_options_, next.max_iterations);
+    max_iterations.set(&options_, next.max_iterations);
   } else {
     Refuse(error);
   }
-  FillConfig(live_, live_options_, &next);  // what the client sees: the values in force
+  FillConfig(live_, options_, &next);  // what the client sees: the values in force
   const bool physics_changed = live_.drive_stiffness != live_before.drive_stiffness ||
                                live_.drive_damping != live_before.drive_damping ||
                                live_.drag_frequency != live_before.drag_frequency ||
-                               live_options_.newton.tolerance != options_before.newton.tolerance ||
-                               live_options_.newton.max_iterations != options_before.newton.max_iterations;
-  if (physics_changed) PostBetweenSteps([this] { JournalUnreplayable("~set_parameters"); });
+                               options_.newton.tolerance != options_before.newton.tolerance ||
+                               options_.newton.max_iterations != options_before.newton.max_iterations;
+  if (physics_changed) on_physics_change_();
 }
 
 }  // namespace implicit_sim
