@@ -15,7 +15,6 @@ namespace implicit_sim {
 namespace conv = ros_conversions;
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // Sets *error when a commanded force (N) or torque (N m) is non-finite or larger than kMaxCommand.
 bool CheckWrenchValues(const Vec3& force, const Vec3& torque, std::string* error) {

@@ -8,7 +8,6 @@
 namespace implicit_sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 double SignedPow(double u, double p) { return std::copysign(std::pow(std::abs(u), p), u); }
 

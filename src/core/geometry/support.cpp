@@ -7,7 +7,6 @@
 namespace implicit_sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // Support point in the shape frame S for a direction u_S, for the primitives built by the Make* functions.
 bool SupportPointInShapeFrame(const ConvexShape& shape, const Vec3& u, Vec3* p) {

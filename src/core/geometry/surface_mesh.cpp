@@ -9,7 +9,6 @@
 namespace implicit_sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 bool Inside(const ConvexShape& shape, const Vec3& x_S) {
   for (const Inequality& inequality : shape.inequalities) {

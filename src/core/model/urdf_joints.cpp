@@ -11,7 +11,6 @@ namespace implicit_sim {
 namespace loader {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 std::string JointWhere(const urdf::Joint& joint) { return "joint '" + joint.name + "'"; }
 

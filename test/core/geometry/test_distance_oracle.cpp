@@ -10,7 +10,6 @@
 namespace implicit_sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kTol = 1e-7;
 
 Pose MakePose(const Vec3& p_W, const Mat3& R_W = Mat3::Identity()) {

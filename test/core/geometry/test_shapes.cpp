@@ -10,7 +10,6 @@
 namespace implicit_sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 Pose SomePose() {
   Pose X = Pose::Identity();

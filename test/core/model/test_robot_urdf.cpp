@@ -22,7 +22,6 @@ namespace implicit_sim {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr double kPi = 3.14159265358979323846;
 // Half extents of the test box (m), exact in single precision (binary STL stores floats).
 const Vec3 kHalf(0.125, 0.0625, 0.25);
 // The box's centre in its mesh frame (m): the mesh is not centred on its frame's origin.

@@ -16,7 +16,6 @@ namespace {
 using test_models::MakePose;
 using test_models::Rot;
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kTol = 1e-12;
 
 // A fixed "ground" (turned half a turn about x, 1 m down), a moving "turned" body at (1, 0, 0) turned a quarter turn

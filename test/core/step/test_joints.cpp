@@ -20,7 +20,6 @@ namespace {
 using testing_support::RunScene;
 using testing_support::ScenePath;
 
-constexpr double kPi = 3.14159265358979323846;
 
 double TotalEnergy(const Model& model, const State& state) {
   double potential = 0.0;

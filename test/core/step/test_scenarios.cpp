@@ -16,7 +16,6 @@ using testing_support::RunScene;
 using testing_support::RunStats;
 using testing_support::ScenePath;
 
-constexpr double kPi = 3.14159265358979323846;
 
 // Lowest world z of the (only) moving body's shape, from closed forms: cylinder or regular prism.
 double LowestPointZ(const Body& body, const Pose& X_WB) {

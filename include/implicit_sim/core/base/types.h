@@ -10,4 +10,6 @@ using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 using Pose = Eigen::Isometry3d;
 
+constexpr double kPi = 3.14159265358979323846;
+
 }  // namespace implicit_sim
