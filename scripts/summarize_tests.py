@@ -8,6 +8,15 @@ import sys
 import xml.etree.ElementTree as ET
 
 
+def why(problem):
+    """The failure's message; rosunit leaves it empty and puts the traceback in the text: its last lines then."""
+    message = (problem.get("message") or "").strip()
+    if message:
+        return message[:300]
+    lines = [line for line in (problem.text or "").strip().splitlines() if line.strip()]
+    return " | ".join(lines[-4:])[-600:]
+
+
 def main(root):
     files = sorted(glob.glob(os.path.join(root, "**", "*.xml"), recursive=True))
     passed, failed = 0, 0
@@ -25,7 +34,7 @@ def main(root):
             problems = list(case.iter("failure")) + list(case.iter("error"))
             if problems:
                 failed += 1
-                print(f"FAILED {case.get('classname')}.{case.get('name')}: {problems[0].get('message', '')[:300]}")
+                print(f"FAILED {case.get('classname')}.{case.get('name')}: {why(problems[0])}")
             elif case.find("skipped") is None:
                 passed += 1
     expected = ["gtest-test_core.xml", "gtest-test_batch.xml", "rostest-test_ros_sim_node_p3.xml", "rosunit-test_sim_node.xml",
