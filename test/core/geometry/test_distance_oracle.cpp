@@ -7,19 +7,15 @@
 
 #include <gtest/gtest.h>
 
+#include "test_models.h"
+
 namespace implicit_sim {
 namespace {
 
 constexpr double kTol = 1e-7;
 
-Pose MakePose(const Vec3& p_W, const Mat3& R_W = Mat3::Identity()) {
-  Pose X = Pose::Identity();
-  X.linear() = R_W;
-  X.translation() = p_W;
-  return X;
-}
-
-Mat3 Rot(double angle, const Vec3& axis) { return Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix(); }
+using test_models::MakePose;
+using test_models::Rot;
 
 void ExpectNear(const Vec3& a, const Vec3& b, double tol) {
   EXPECT_LT((a - b).norm(), tol) << "got " << a.transpose() << ", expected " << b.transpose();

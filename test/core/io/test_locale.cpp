@@ -26,6 +26,7 @@
 #include "implicit_sim/core/base/format.h"
 #include "implicit_sim/core/model/urdf_loader.h"
 #include "scenario_runner.h"
+#include "test_files.h"
 
 namespace implicit_sim {
 namespace {
@@ -288,10 +289,7 @@ TEST(Locale, ModelsAreBitIdenticalWithOnlyTheCppLocaleChanged) {
 
 // --- the runner under LC_ALL=de_DE.UTF-8 and LC_ALL=C ---
 
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
+using test_files::ReadText;
 
 int RunUnderLocale(const std::string& locale, const std::string& args, const std::string& log_prefix) {
   const std::string command = "env LC_ALL=" + locale + " " + IMPLICIT_SIM_RUNNER + " " + args + " > '" + log_prefix +

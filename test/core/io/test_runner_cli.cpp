@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "scenario_runner.h"
+#include "test_files.h"
 
 namespace implicit_sim {
 namespace {
@@ -23,10 +24,7 @@ int RunRunner(const std::string& args) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-bool Exists(const std::string& path) {
-  struct stat st;
-  return ::stat(path.c_str(), &st) == 0;
-}
+using test_files::Exists;
 
 // True if `path` is a PNG file of more than `min_bytes` (a plot with curves, not an empty frame).
 ::testing::AssertionResult IsPngWithContent(const std::string& path, size_t min_bytes = 20000) {

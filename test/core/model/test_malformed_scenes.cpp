@@ -19,6 +19,7 @@
 
 #include "implicit_sim/core/model/urdf_loader.h"
 #include "scenario_runner.h"
+#include "test_files.h"
 
 namespace implicit_sim {
 namespace {
@@ -75,15 +76,8 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-bool Exists(const std::string& path) {
-  struct stat st;
-  return ::stat(path.c_str(), &st) == 0;
-}
+using test_files::Exists;
+using test_files::ReadText;
 
 std::string FreshTempDir(const std::string& name) {
   const std::string dir = ::testing::TempDir() + "implicit_sim_malformed_" + name;
