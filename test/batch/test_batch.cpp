@@ -276,7 +276,7 @@ TEST(BatchStudy, BadSweepsAndArgumentsAreRefusedNamingTheKey) {
       {"bad_duration", "duration: 3", "duration: -3", {"stop.duration", "(0, 1e+06]"}},
       {"bad_energy", "kinetic_energy: 1.0e-5", "kinetic_energy: 0", {"stop.at_rest.kinetic_energy", "J"}},
       {"bad_dt", "dt: 0.005", "dt: 2", {"dt", "(0, 1]"}},
-      {"bad_scheme", "scheme: paper", "scheme: verlet", {"scheme", "paper, rattle", "verlet"}},
+      {"bad_scheme", "scheme: paper", "scheme: verlet", {"scheme", "paper or rattle", "verlet"}},
       {"bad_classifier", "classifier: box_faces", "classifier: corners", {"classifier", "box_faces"}},
       {"no_scene", "/scenes/cube_drop.urdf ", "/scenes/nothing.urdf ", {"scene", "no such file"}},
       {"bad_body", "body: cube", "body: ground", {"body", "floating"}},

@@ -1,0 +1,74 @@
+"""implicit_sim_batch's sweep files: the step options come from the core's options table and are checked by its range
+check (doc/batch.md, "Step options"), and a sample's runner command carries them."""
+import importlib.machinery
+import importlib.util
+
+import pytest
+
+import implicit_sim
+from conftest import REPO, scene
+
+
+def load_batch():
+    path = str(REPO / "scripts" / "implicit_sim_batch")
+    loader = importlib.machinery.SourceFileLoader("implicit_sim_batch", path)
+    module = importlib.util.module_from_spec(importlib.util.spec_from_loader("implicit_sim_batch", loader))
+    loader.exec_module(module)
+    return module
+
+
+batch = load_batch()
+
+
+def write_sweep(tmp_path, extra, duration=1):
+    text = (f"scene: {scene('cube_drop.urdf')}\nbody: cube\nsamples: 2\nseed: 1\nclassifier: box_faces\n"
+            f"stop:\n  duration: {duration}\n{extra}")
+    path = tmp_path / "sweep.yaml"
+    path.write_text(text)
+    return str(path)
+
+
+def test_the_sweep_keys_are_the_tables_rows_with_a_runner_flag():
+    rows = {r["ros_param"]: r for r in implicit_sim.option_table() if r["runner_flag"]}
+    keys = batch.step_option_rows()
+    assert set(keys) == {"dt"} | set(rows) - {"time_step", "threads"}
+    assert list(keys) == [k for k in ["dt" if p == "time_step" else p for p in rows] if k in keys]  # the table's order
+    assert keys["dt"]["runner_flag"] == "--dt"
+
+
+def test_given_options_reach_the_runner_in_the_tables_order(tmp_path):
+    sweep = batch.load_sweep(write_sweep(tmp_path, "max_iterations: 40\nscheme: paper\ntolerance: '1e-10'\n"
+                                                   "solver: newton\ndt: 0.004\n"))
+    assert batch.step_option_flags(sweep) == ["--dt", "0.004", "--scheme", "paper", "--solver", "newton",
+                                              "--tolerance", "1e-10", "--max-iterations", "40"]
+
+
+def test_only_dt_has_a_default(tmp_path):
+    sweep = batch.load_sweep(write_sweep(tmp_path, ""))
+    assert batch.step_option_flags(sweep) == ["--dt", "0.01"]
+    assert "scheme" not in sweep and "max_iterations" not in sweep
+
+
+@pytest.mark.parametrize("line, message", [
+    ("dt: 2", "dt: must be in (0, 1] s, got 2"),
+    ("dt: 0", "dt: must be in (0, 1] s, got 0"),
+    ("dt: true", "dt: must be (0, 1], got True"),
+    ("dt: fast", "dt: expected a number, got 'fast'"),
+    ("scheme: verlet", "scheme: must be paper or rattle, got 'verlet'"),
+    ("scheme: 2", "scheme: must be paper or rattle, got 2"),
+    ("solver: lemke", "solver: must be newton or ipopt, got 'lemke'"),
+    ("tolerance: 0.5", "tolerance: must be in (0, 0.1], got 0.5"),
+    ("max_iterations: 0", "max_iterations: must be an integer in [1, 100000], got 0"),
+    ("max_iterations: 2.5", "max_iterations: must be an integer in [1, 100000], got 2.5"),
+    ("threads: 2", "threads: unknown key"),
+    ("lm_damping: 0.1", "lm_damping: unknown key"),  # a table row without a runner flag
+])
+def test_a_bad_option_is_refused_with_the_cores_message(tmp_path, line, message):
+    with pytest.raises(batch.UsageError) as refused:
+        batch.load_sweep(write_sweep(tmp_path, line + "\n"))
+    assert message in str(refused.value)
+
+
+def test_dt_longer_than_the_run_is_refused(tmp_path):
+    with pytest.raises(batch.UsageError, match=r"dt: must be at most stop.duration \(0.2 s\), got 0.5"):
+        batch.load_sweep(write_sweep(tmp_path, "dt: 0.5\n", duration=0.2))
