@@ -50,6 +50,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import implicit_sim  # noqa: E402
+from implicit_sim.scene import Scene, Shape  # noqa: E402
 
 FACES = ("+x", "-x", "+y", "-y", "+z", "-z")
 PART = "part"
@@ -94,39 +95,16 @@ def parse_arguments(argv):
 def part_scene(half_extents, exponent, mass, mu):
     """URDF text: the rounded box `part` on a floating joint above the ground plane z = 0 (doc/scenes.md)."""
     a, b, c = half_extents
-    return f"""<?xml version="1.0"?>
-<!-- examples/monte_carlo_drop.py: a rounded box (superellipsoid, half extents {a} {b} {c} m, exponent {exponent},
-     {mass} kg, inertia of the uniform solid) dropped on the ground plane z = 0; mu = {mu}, e_t = e_o = 1,
-     e_r = 0.01 m. The script sets the part's initial pose and twist per drop. -->
-<robot name="part_drop">
-  <implicit_sim gravity="0 0 -9.81">
-    <friction mu="{mu}" e_t="1" e_o="1" e_r="0.01"/>
-  </implicit_sim>
-  <link name="world"/>
-  <link name="ground">
-    <collision>
-      <geometry><box size="4 4 0.001"/></geometry>
-      <implicit type="halfspace"/>
-    </collision>
-  </link>
-  <joint name="ground_joint" type="fixed">
-    <parent link="world"/>
-    <child link="ground"/>
-  </joint>
-  <link name="{PART}">
-    <visual><geometry><box size="{2 * a} {2 * b} {2 * c}"/></geometry></visual>
-    <collision>
-      <geometry><box size="{2 * a} {2 * b} {2 * c}"/></geometry>
-      <implicit type="superellipsoid" semi_axes="{a} {b} {c}" exponent="{exponent}" mass="{mass}"/>
-    </collision>
-  </link>
-  <joint name="{PART}_joint" type="floating">
-    <parent link="world"/>
-    <child link="{PART}"/>
-    <origin xyz="0 0 1"/>
-  </joint>
-</robot>
-"""
+    scene = Scene("part_drop", comment=f"examples/monte_carlo_drop.py: a rounded box (superellipsoid, half extents {a} "
+                  f"{b} {c} m, exponent {exponent},\n     {mass} kg, inertia of the uniform solid) dropped on the ground "
+                  f"plane z = 0; mu = {mu}, e_t = e_o = 1,\n     e_r = 0.01 m. The script sets the part's initial pose "
+                  "and twist per drop.")
+    scene.friction(mu=mu, e_t=1, e_o=1, e_r=0.01)
+    scene.halfspace("ground")
+    scene.link(PART, mass, visual=Shape.box((2 * a, 2 * b, 2 * c)),
+               collision=Shape.superellipsoid((a, b, c), exponent))  # the inertia from the mass (closed form)
+    scene.floating(PART, xyz=(0, 0, 1))
+    return scene.urdf()
 
 
 def random_unit_quaternion(rng):

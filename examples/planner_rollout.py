@@ -49,6 +49,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import implicit_sim  # noqa: E402
+from implicit_sim.scene import Scene, Shape  # noqa: E402
 
 BOX = "box"
 TABLE = "table"
@@ -130,39 +131,14 @@ def candidate_pushes(quick):
 def box_scene():
     a, b, c = HALF_EXTENTS
     inertia = MASS / 3.0 * np.array([b * b + c * c, a * a + c * c, a * a + b * b])  # kg m^2, the uniform solid
-    return f"""<?xml version="1.0"?>
-<!-- examples/planner_rollout.py: a box ({2 * a} x {2 * b} x {2 * c} m, {MASS} kg) standing on a table, the plane z = 0;
-     mu = {MU}, e_t = e_o = 1, e_r = 0.05 m. The script pushes it with wrenches given per step. -->
-<robot name="box_push">
-  <implicit_sim gravity="0 0 -9.81">
-    <friction mu="{MU}" e_t="1" e_o="1" e_r="0.05"/>
-  </implicit_sim>
-  <link name="world"/>
-  <link name="{TABLE}">
-    <collision>
-      <geometry><box size="4 4 0.001"/></geometry>
-      <implicit type="halfspace"/>
-    </collision>
-  </link>
-  <joint name="{TABLE}_joint" type="fixed">
-    <parent link="world"/>
-    <child link="{TABLE}"/>
-  </joint>
-  <link name="{BOX}">
-    <inertial>
-      <mass value="{MASS}"/>
-      <inertia ixx="{inertia[0]!r}" ixy="0" ixz="0" iyy="{inertia[1]!r}" iyz="0" izz="{inertia[2]!r}"/>
-    </inertial>
-    <visual><geometry><box size="{2 * a} {2 * b} {2 * c}"/></geometry></visual>
-    <collision><geometry><box size="{2 * a} {2 * b} {2 * c}"/></geometry></collision>
-  </link>
-  <joint name="{BOX}_joint" type="floating">
-    <parent link="world"/>
-    <child link="{BOX}"/>
-    <origin xyz="0 0 {c}"/>
-  </joint>
-</robot>
-"""
+    scene = Scene("box_push", comment=f"examples/planner_rollout.py: a box ({2 * a} x {2 * b} x {2 * c} m, {MASS} kg) "
+                  f"standing on a table, the plane z = 0;\n     mu = {MU}, e_t = e_o = 1, e_r = 0.05 m. The script pushes "
+                  "it with wrenches given per step.")
+    scene.friction(mu=MU, e_t=1, e_o=1, e_r=0.05)
+    scene.halfspace(TABLE)
+    scene.link(BOX, MASS, inertia, visual=Shape.box((2 * a, 2 * b, 2 * c)), collision=Shape.box((2 * a, 2 * b, 2 * c)))
+    scene.floating(BOX, xyz=(0, 0, c))
+    return scene.urdf()
 
 
 class World:

@@ -9,6 +9,7 @@ import pytest
 
 import implicit_sim
 from conftest import scene
+from implicit_sim.scene import Scene, Shape
 
 
 @pytest.mark.parametrize("name, duration, scheme", [
@@ -178,18 +179,13 @@ def test_saved_state_and_warm_start_continue_bit_identically(name, steps):
 def cube_scene(force=None):
     """A 1 kg cube (edge 1 m, rotations locked) resting on the floor, mu = 0.5, optionally with a constant applied
     force in the scene."""
-    attribute = f' force="{force[0]} {force[1]} {force[2]}"' if force else ""
-    return f"""<robot name="cube">
-  <implicit_sim gravity="0 0 -9.81"><friction mu="0.5" e_t="1" e_o="1" e_r="0.01"/>
-    <body link="cube" locked="rx ry rz"{attribute}/></implicit_sim>
-  <link name="world"/>
-  <link name="floor">
-    <collision><geometry><box size="4 4 0.001"/></geometry><implicit type="halfspace"/></collision></link>
-  <joint name="floor_joint" type="fixed"><parent link="world"/><child link="floor"/></joint>
-  <link name="cube"><inertial><mass value="1"/><inertia ixx="0.1667" iyy="0.1667" izz="0.1667" ixy="0" ixz="0" iyz="0"/>
-    </inertial><collision><geometry><box size="1 1 1"/></geometry></collision></link>
-  <joint name="cube_joint" type="floating"><parent link="world"/><child link="cube"/><origin xyz="0 0 0.5"/></joint>
-</robot>"""
+    scene = Scene("cube")
+    scene.friction(mu=0.5, e_t=1, e_o=1, e_r=0.01)
+    scene.body("cube", locked="rx ry rz", force=force)
+    scene.halfspace("floor")
+    scene.link("cube", 1, ("0.1667", "0.1667", "0.1667"), collision=Shape.box((1, 1, 1)))
+    scene.floating("cube", xyz=(0, 0, 0.5))
+    return scene.urdf()
 
 
 def test_a_wrench_given_per_step_acts_as_the_same_force_in_the_scene():

@@ -22,6 +22,7 @@ import rospy
 import rostest
 from geometry_msgs.msg import Point, Pose, Quaternion, Twist, Vector3
 from implicit_sim.msg import BodyStates
+from implicit_sim.scene import Scene, Shape
 from implicit_sim.srv import Delete, GetBodyState, LoadScene, Spawn
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
@@ -39,17 +40,11 @@ def call(name, srv_type, *args):
 
 def balls_urdf(n, spacing=0.15, height=0.5):
     """A scene of n free spheres (r = 0.05 m, 0.1 kg) in a row along x at `height`."""
-    links = []
+    scene = Scene("balls")
     for i in range(n):
-        links.append(f"""
-  <link name="ball{i}">
-    <inertial><mass value="0.1"/><inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial>
-    <collision><geometry><sphere radius="0.05"/></geometry></collision>
-  </link>
-  <joint name="ball{i}_joint" type="floating">
-    <parent link="world"/><child link="ball{i}"/><origin xyz="{i * spacing} 0 {height}"/>
-  </joint>""")
-    return '<?xml version="1.0"?>\n<robot name="balls">\n  <link name="world"/>' + "".join(links) + "\n</robot>\n"
+        scene.link(f"ball{i}", 0.1, ("1e-4", "1e-4", "1e-4"), collision=Shape.sphere(0.05))
+        scene.floating(f"ball{i}", xyz=(i * spacing, 0, height))
+    return scene.urdf()
 
 
 def body_names():
