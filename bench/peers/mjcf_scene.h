@@ -1,6 +1,6 @@
 // MJCF (MuJoCo's model format) for one of our scenes, written from our loaded Model so that both engines simulate the
 // same bodies, masses, inertias, initial poses and velocities, applied forces, gravity and friction. The modelling
-// choices follow /work/shared/peers/MUJOCO_NOTES.md (bench/README.md#side-by-side-with-mujoco):
+// choices are described in bench/README.md#side-by-side-with-mujoco:
 //   - a fixed half-space is a `plane` geom with the same frame (both occupy local z <= 0); fixed spheres are world
 //     geoms; moving spheres, ellipsoids and cylinders are the same primitives; an N-gon prism is a convex `mesh`
 //     with its 2N vertices;
