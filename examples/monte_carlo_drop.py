@@ -96,8 +96,8 @@ def part_scene(half_extents, exponent, mass, mu):
     """URDF text: the rounded box `part` on a floating joint above the ground plane z = 0 (doc/scenes.md)."""
     a, b, c = half_extents
     scene = Scene("part_drop", comment=f"examples/monte_carlo_drop.py: a rounded box (superellipsoid, half extents {a} "
-                  f"{b} {c} m, exponent {exponent},\n     {mass} kg, inertia of the uniform solid) dropped on the ground "
-                  f"plane z = 0; mu = {mu}, e_t = e_o = 1,\n     e_r = 0.01 m. The script sets the part's initial pose "
+                  f"{b} {c} m, exponent {exponent},\n     {mass} kg, inertia of the uniform solid) dropped on the "
+                  f"ground plane z = 0; mu = {mu}, e_t = e_o = 1,\n     e_r = 0.01 m. The script sets the part's initial pose "
                   "and twist per drop.")
     scene.friction(mu=mu, e_t=1, e_o=1, e_r=0.01)
     scene.halfspace("ground")

@@ -132,8 +132,8 @@ def box_scene():
     a, b, c = HALF_EXTENTS
     inertia = MASS / 3.0 * np.array([b * b + c * c, a * a + c * c, a * a + b * b])  # kg m^2, the uniform solid
     scene = Scene("box_push", comment=f"examples/planner_rollout.py: a box ({2 * a} x {2 * b} x {2 * c} m, {MASS} kg) "
-                  f"standing on a table, the plane z = 0;\n     mu = {MU}, e_t = e_o = 1, e_r = 0.05 m. The script pushes "
-                  "it with wrenches given per step.")
+                  f"standing on a table, the plane z = 0;\n     mu = {MU}, e_t = e_o = 1, e_r = 0.05 m. The script "
+                  "pushes it with wrenches given per step.")
     scene.friction(mu=MU, e_t=1, e_o=1, e_r=0.05)
     scene.halfspace(TABLE)
     scene.link(BOX, MASS, inertia, visual=Shape.box((2 * a, 2 * b, 2 * c)), collision=Shape.box((2 * a, 2 * b, 2 * c)))

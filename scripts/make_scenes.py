@@ -53,7 +53,8 @@ def ball(scene, name, radius, mass, inertia):
 def p1(name, collision, comment):
     scene = Scene(name, comment="P1 (paper Example 1): a unit disc (r = 1 m, m = 1 kg, I = 0.5 kg m^2 about its axis) "
                   "rolling without slip\n     on the plane z = 0: v = (-3, 0, 0) m/s, w = (0, -3, 0) rad/s, mu = 0.4. "
-                  "Planar: y, rx and rz are locked.\n     Exact: KE = 6.75 J forever, x(t) = -3 t.\n     The " + comment +
+                  "Planar: y, rx and rz are locked.\n     Exact: KE = 6.75 J forever, x(t) = -3 t.\n     The "
+                  + comment +
                   ", its axis along world y.\n     " + GENERATED)
     scene.friction(mu=0.4, e_t=1, e_o=1, e_r=0.1)
     scene.body("disc", velocity="-3 0 0", angular_velocity="0 -3 0", locked="y rx rz")
@@ -140,8 +141,8 @@ def ellipsoid_rolling():
     """An egg-shaped ellipsoid rolling, rocking and turning on the ground plane (README animation)."""
     a, b, c, mass = 0.24, 0.14, 0.14, 1.0
     scene = Scene("ellipsoid_rolling", comment=f"An ellipsoid (semi-axes {a}, {b}, {c} m, {mass:g} kg) lying on its "
-                  "side on the plane z = 0, thrown along x at\n     0.9 m/s with a spin of 6.5 rad/s about y and 3 rad/s "
-                  f"about z: it rolls, rocks and turns, its centre rising and\n     falling between {c} and 0.2 m; "
+                  "side on the plane z = 0, thrown along x at\n     0.9 m/s with a spin of 6.5 rad/s about y and 3 "
+                  f"rad/s about z: it rolls, rocks and turns, its centre rising and\n     falling between {c} and 0.2 m; "
                   "mu = 0.6, e_t = e_o = 1, e_r = 0.02 m. The README's rolling-ellipsoid animation\n"
                   "     (scripts/make_animations). " + GENERATED)
     scene.friction(mu=0.6, e_t=1, e_o=1, e_r=0.02)

@@ -1,5 +1,4 @@
 """implicit_sim.scene: the scene builder the examples, scripts/make_scenes.py and these tests write URDF with."""
-import importlib.util
 import math
 import subprocess
 import sys
@@ -67,7 +66,8 @@ def test_joints_with_limits_and_a_start_load_as_written():
     scene = Scene("arm")
     scene.link("base", collision=Shape.box((0.1, 0.1, 0.1)))
     scene.fixed("base")
-    scene.link("upper", 1, (0.01, 0.01, 0.001), com=(0, 0, 0.2), collision=Shape.cylinder(0.03, 0.4).at(xyz=(0, 0, 0.2)))
+    scene.link("upper", 1, (0.01, 0.01, 0.001), com=(0, 0, 0.2),
+               collision=Shape.cylinder(0.03, 0.4).at(xyz=(0, 0, 0.2)))
     scene.joint("shoulder", "revolute", "base", "upper", xyz=(0, 0, 0.05), axis=(1, 0, 0),
                 limit=dict(lower=-1.5, upper=1.5, effort=20, velocity=3))
     scene.joint_start("shoulder", position=0.25)
