@@ -151,7 +151,7 @@ TEST(StepProblemJacobian, RattlePositionStage) {
   }
 }
 
-TEST(StepProblemJacobian, RattleVelocityStage) {
+TEST(StepProblemJacobian, RattleVelocityProblem) {
   for (const bool sparse : {false, true}) {
     ExpectJacobianMatchesFiniteDifferences(test_models::EllipsoidOnGround(), 31, sparse, false, 0.0, Stage::kRattleVelocity);
     ExpectJacobianMatchesFiniteDifferences(test_models::SphereOnTwoSpheres(), 32, sparse, false, 0.0,
