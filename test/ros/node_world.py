@@ -165,8 +165,9 @@ class NodeWorld(unittest.TestCase):
         fixed = call("get_body_state", GetBodyState, "base_link").state.pose.position
         self.assertEqual((fixed.x, fixed.y, fixed.z), (0.0, 0.0, 0.0))
 
-    def test_5_spawn_and_delete_cycles_leave_memory_and_latency_flat(self):
+    def test_5_spawn_and_delete_cycles_leave_memory_flat_and_no_body_behind(self):
         self.assertTrue(call("load_scene", LoadScene, "", "cube_drop").success)
+        bodies_before = sorted(body_names())
         self.assertTrue(call("pause", Trigger).success)  # the services' own cost, not the wait for a step
         rospy.wait_for_service(NODE + "/spawn", timeout=10)
         spawn = rospy.ServiceProxy(NODE + "/spawn", Spawn, persistent=True)
@@ -183,7 +184,7 @@ class NodeWorld(unittest.TestCase):
             if cycle in (10, 100):
                 time.sleep(0.5)
                 rss[cycle] = node_rss_bytes()
-        # The least of each window of 10 cycles: the calls' own cost, without the scheduling noise of a shared machine.
+        # Printed: the least of each window of 10 cycles, the calls' own cost without most of the scheduling noise.
         early, late = min(latencies[:10]), min(latencies[90:])
         growth = rss[100] - rss[10]
         print("[ INFO ] 100 spawn/delete cycles of 10 bodies: RSS %.1f MB after cycle 10, growth to cycle 100 %+.3f MB; "
@@ -191,7 +192,10 @@ class NodeWorld(unittest.TestCase):
               % (rss[10] / 1e6, growth / 1e6, 1e3 * early, 1e3 * late, 1e3 * statistics.median(latencies[:10]),
                  1e3 * statistics.median(latencies[90:])), flush=True)
         self.assertLess(growth, 2e6)
-        self.assertLess(late, 1.2 * early)
+        # Nothing of the 1000 spawned bodies stays behind (the calls' cost is printed above, never asserted: a timing
+        # on the shared machine is noise, doc/testing.md).
+        self.assertTrue(call("unpause", Trigger).success)
+        self.assertEqual(sorted(body_names()), bodies_before)
 
 
 if __name__ == "__main__":
