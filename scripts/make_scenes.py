@@ -50,6 +50,13 @@ def ball(scene, name, radius, mass, inertia):
     scene.link(name, mass, (inertia, inertia, inertia), visual=Shape.sphere(radius), collision=Shape.sphere(radius))
 
 
+def ellipsoid(scene, name, mass, semi_axes):
+    """A solid ellipsoid link (tools draw the sphere of its largest semi-axis, which comes first here)."""
+    a, b, c = semi_axes
+    inertia = [f"{mass / 5 * (p * p + q * q):.6g}" for p, q in ((b, c), (a, c), (a, b))]
+    scene.link(name, mass, inertia, visual=Shape.sphere(a), collision=Shape.ellipsoid(semi_axes))
+
+
 def p1(name, collision, comment):
     scene = Scene(name, comment="P1 (paper Example 1): a unit disc (r = 1 m, m = 1 kg, I = 0.5 kg m^2 about its axis) "
                   "rolling without slip\n     on the plane z = 0: v = (-3, 0, 0) m/s, w = (0, -3, 0) rad/s, mu = 0.4. "
@@ -148,8 +155,7 @@ def ellipsoid_rolling():
     scene.friction(mu=0.6, e_t=1, e_o=1, e_r=0.02)
     scene.body("egg", velocity="0.9 0 0", angular_velocity="0 6.5 3")
     ground(scene)
-    inertia = [f"{mass / 5 * (p * p + q * q):.6g}" for p, q in ((b, c), (a, c), (a, b))]
-    scene.link("egg", f"{mass:g}", inertia, visual=Shape.sphere(a), collision=Shape.ellipsoid((a, b, c)))
+    ellipsoid(scene, "egg", mass, (a, b, c))
     scene.floating("egg", xyz=f"0 0 {c}")
     return scene
 
@@ -161,9 +167,7 @@ def pile_part(scene, i, kind):
         r = 0.045
         ball(scene, f"part_{i}", r, mass, f"{0.4 * mass * r * r:.6g}")
     elif kind == "ellipsoid":
-        a, b, c = 0.065, 0.042, 0.032
-        inertia = [f"{mass / 5 * (p * p + q * q):.6g}" for p, q in ((b, c), (a, c), (a, b))]
-        scene.link(f"part_{i}", mass, inertia, visual=Shape.sphere(a), collision=Shape.ellipsoid((a, b, c)))
+        ellipsoid(scene, f"part_{i}", mass, (0.065, 0.042, 0.032))
     else:
         rounded_box(scene, f"part_{i}", mass, (0.11, 0.07, 0.05))
 
