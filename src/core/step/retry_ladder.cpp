@@ -12,6 +12,9 @@ namespace {
 // Hessian, and halving the step is cheaper: such islands try Ipopt only as a last chance, in the shortest sub-step.
 constexpr int kIpoptFirstSizeLimit = 600;
 
+// Newton iterations of a warm attempt that has a fallback formulation (RATTLE stage 1's start frames).
+constexpr int kStartFrameIterations = 6;
+
 // One ladder's problem, its Newton solver, its iterate *z, the island's workspace (z_start, z_best, z_center, z_cold)
 // and the report its rungs count into. Every rung reads and writes only these.
 struct Ladder {
@@ -137,7 +140,13 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
                                                             &island->z_start);
     }
   }
-  NcpSummary warm = SolveFromStart(options, &ladder);
+  // With a fallback formulation to go to, the warm attempt gets a short budget: a start frame that has no nearby root
+  // is not found by more iterations, and the fallback usually converges in a few.
+  StepperOptions warm_options = options;
+  if (problem.HasFallbackFrames()) {
+    warm_options.newton.max_iterations = std::min(options.newton.max_iterations, kStartFrameIterations);
+  }
+  NcpSummary warm = SolveFromStart(warm_options, &ladder);
   if (warm.converged) return warm;
   // Rung 1a: the problem's fallback formulation (RATTLE stage 1: every pair on its end-of-step frame; a start frame on
   // the wrong feature, a polygon that tips onto its next face within the step, can leave stage 1 without a solution).

@@ -23,6 +23,8 @@ constexpr std::array<StepCounter, kNumStepCounters> kCounters{{
     {"islands", &R::islands, kStep, false},
     {"largest_island", &R::largest_island, kStep, false},
     {"active_contacts", &R::active_contacts, kStep, false},
+    {"energy_fallbacks", &R::energy_fallbacks, kSum, true},
+    {"paper_fallbacks", &R::paper_fallbacks, kSum, true},
 }};
 
 }  // namespace

@@ -1,6 +1,7 @@
 // Every analytic Jacobian block of the step's problems (problems/: the paper's step and RATTLE's two stages) against
 // central finite differences (doc/method.md, pitfall 4), at random points away from the Fischer-Burmeister kink, for
 // moving-fixed and moving-moving pairs of several shapes; and the rows the layout and the evaluation modes promise.
+#include "implicit_sim/core/geometry/support.h"
 #include "implicit_sim/core/step/problems/step_problem.h"
 
 #include <random>
@@ -74,6 +75,22 @@ void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, b
       known[c] = c % 2 == 0;
       frame.segment<3>(blocks[c].offset + pair_index::kN).normalize();
       frame[blocks[c].offset + pair_index::kD] = 0.0;  // touching at the start
+      // Every inequality active (a vertex of a polytope) and each closest point of a bounded shape on its surface,
+      // where it is curved: the start frame is kept (RattlePositionProblem::SetStartFrames).
+      frame.segment(blocks[c].offset + pair_index::kAlpha, blocks[c].k1 + blocks[c].k2).setOnes();
+      const Vec3 n0 = frame.segment<3>(blocks[c].offset + pair_index::kN);
+      const int locals[2] = {blocks[c].body1, blocks[c].body2};
+      for (int side = 0; side < 2; ++side) {
+        const Body& body = model.bodies[problems.layout.bodies()[locals[side]]];
+        if (!body.shape.IsBounded()) continue;
+        const BodyStart& start = problems.kinematics.start(locals[side]);
+        Pose X_WB = Pose::Identity();
+        X_WB.linear() = start.R0;
+        X_WB.translation() = start.p0;
+        Vec3 point;
+        SupportPoint(body.shape, X_WB, side == 0 ? Vec3(-n0) : n0, &point);
+        frame.segment<3>(blocks[c].offset + (side == 0 ? pair_index::kA1 : pair_index::kA2)) = point;
+      }
     }
     problems.position.SetStartFrames(frame, known);
     for (size_t c = 0; c < known.size(); ++c) {

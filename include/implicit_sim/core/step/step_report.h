@@ -25,6 +25,8 @@ struct StepReport {
   bool advanced = false;        // the state was advanced (false only when no finite solution was found)
   int projected_solves = 0;     // solves whose warm start failed and that were retried with projected multipliers
   int end_frame_retries = 0;    // RATTLE: stage-1 warm starts retried with every pair on its end-of-step frame
+  int energy_fallbacks = 0;     // RATTLE: steps that failed the energy guard (energy_guard.h) and were solved again
+  int paper_fallbacks = 0;      // of those, steps whose island then took the paper's step
   int cold_restarts = 0;        // solves whose warm start failed and that were retried from a cold start
   int proximal_solves = 0;      // solves that went on to the proximal-point rung after the cold start failed
   int smoothed_solves = 0;      // solves that went on to a smoothing continuation after the cold start failed
@@ -60,7 +62,7 @@ struct StepCounter {
   CounterMerge merge;
   bool run_total;    // summed over a run into the runner's summary.json
 };
-constexpr int kNumStepCounters = 15;
+constexpr int kNumStepCounters = 17;
 const std::array<StepCounter, kNumStepCounters>& StepCounterTable();
 
 // Adds an island's report to the step's: its counters by their rows, the residuals take the largest, converged only if

@@ -4,6 +4,7 @@
 
 #include "implicit_sim/core/ncp/ncp_error.h"
 #include "implicit_sim/core/step/data.h"
+#include "implicit_sim/core/step/energy_guard.h"
 #include "implicit_sim/core/step/retry_ladder.h"
 #include "implicit_sim/core/step/schemes/paper_scheme.h"
 
@@ -11,32 +12,71 @@ namespace implicit_sim {
 
 RattleScheme::RattleScheme(const StepLayout& layout, const StepKinematics& kinematics,
                            const std::vector<JointDrive>& drives)
-    : position_(layout, kinematics, drives, /*regular_separated_friction=*/true),
-      velocity_(layout, kinematics, drives) {}
+    : kinematics_(kinematics),
+      position_(layout, kinematics, drives, /*regular_separated_friction=*/true),
+      velocity_(layout, kinematics, drives),
+      paper_(layout, kinematics, drives, /*regular_separated_friction=*/true) {}
 
 // Start frames from the warm start: the previous step's closest points, at this step's start.
 void RattleScheme::BeginStep(IslandSolve* island) {
   if (!island->has_warm_start) std::fill(island->frame_known.begin(), island->frame_known.end(), 0);
   position_.SetStartFrames(island->z, island->frame_known);
   position_complementarity_ = 0.0;
+  paper_step_ = false;
 }
 
 bool RattleScheme::FinishStep(const StepperOptions& options, bool converged, IslandSolve* island,
                               StepReport* report) {
-  if (converged && position_.FallBackWhereActiveSetsChanged(island->z) > 0) {
-    const NcpSummary again = position_solvers_.For(position_).Solve(position_, options.newton, &island->z);
-    report->iterations += again.iterations;
-    report->residual_evaluations += again.residual_evaluations;
-    converged = again.converged;
+  stage1_seed_ = island->z_start;  // the ladder's starting iterate (stage 2's ladder reuses z_start)
+  const bool solved = converged && position_.FallBackWhereFramesMoved(island->z) > 0
+                          ? SolveStagesAgain(options, island, report)
+                          : SolveVelocityStage(options, island, report) && converged;
+  if (!solved) return false;
+  if (EnergyHolds(*island)) return true;
+  // The energy guard: the cheap paths, not the retry ladder.
+  report->energy_fallbacks++;
+  if (position_.UseFallbackFrames() > 0 && SolveStagesAgain(options, island, report) && EnergyHolds(*island)) {
+    return true;
   }
+  report->paper_fallbacks++;
+  paper_step_ = true;
+  island->z = stage1_seed_;
+  const NcpSummary paper = SolveFromGuess(options, paper_, &paper_solvers_, &island->z, island, report);
+  report->residual = std::max(report->residual, paper.residual);
+  return paper.converged && island->z.allFinite();
+}
+
+bool RattleScheme::SolveStagesAgain(const StepperOptions& options, IslandSolve* island, StepReport* report) {
+  island->z = stage1_seed_;
+  const NcpSummary again = position_solvers_.For(position_).Solve(position_, options.newton, &island->z);
+  report->iterations += again.iterations;
+  report->residual_evaluations += again.residual_evaluations;
+  return SolveVelocityStage(options, island, report) && again.converged;
+}
+
+bool RattleScheme::SolveVelocityStage(const StepperOptions& options, IslandSolve* island, StepReport* report) {
   position_complementarity_ = ComputeNcpError(position_, island->z, &island->ncp_error_rows).complementarity;
   velocity_.Begin(position_, island->z, island->ncp_error_rows, &velocities_);
   const NcpSummary velocity = SolveFromGuess(options, velocity_, &velocity_solvers_, &velocities_, island, report);
   report->residual = std::max(report->residual, velocity.residual);
-  return converged && velocity.converged && velocities_.allFinite();
+  return velocity.converged && velocities_.allFinite();
+}
+
+bool RattleScheme::EnergyHolds(const IslandSolve& island) const {
+  return StepEnergyBalance(kinematics_, island.z, velocities_).holds();
+}
+
+const Eigen::VectorXd& RattleScheme::velocity_solution(const IslandSolve& island) const {
+  return paper_step_ ? island.z : velocities_;
+}
+
+const StepProblem& RattleScheme::velocity_problem() const {
+  if (paper_step_) return paper_;
+  return velocity_;
 }
 
 double RattleScheme::ComplementarityError(IslandSolve* island) {
+  if (paper_step_) return ComputeNcpError(paper_, island->z, &island->ncp_error_rows).complementarity;
   const NcpError velocity_error = ComputeNcpError(velocity_, velocities_, &island->ncp_error_rows);
   return std::max(position_complementarity_, velocity_error.complementarity);
 }

@@ -46,6 +46,8 @@ class StepProblem : public NcpProblem {
   // A second formulation worth a second warm attempt when the first failed (the retry ladder's rung 1a): switches to
   // it and returns how many pairs it changed (0: none, the default).
   virtual int UseFallbackFrames() { return 0; }
+  // Whether the problem has such a fallback formulation it has not switched to yet.
+  virtual bool HasFallbackFrames() const { return false; }
   // The contact quantities of every pair for a solution z (one entry per block, in block order).
   void Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>* out) const;
 
