@@ -17,8 +17,8 @@ Run (after `source /tmp/implicit_sim_ws/devel/setup.bash`, from the repository r
 
 One JSON line per (case, scheme, h): case ("drops" or the pile's file name), scheme, h_s, runs, steps, wall_time_s,
 rising_steps (steps whose energy rose by more than --rise-tolerance J), rising_steps_1pct (rose by more than 1 % of
-the run's start energy), largest_step_rise_J, runs_above_start (end energy above start + --rise-tolerance),
-nonconverged_steps, energy_fallbacks, newton_iterations, at_rest (runs whose kinetic energy is below 1e-4 J at the
+the run's start energy), guard_violations (rose by more than the energy guard's allowance, computed here), largest_step_rise_J, runs_above_start (end energy above start + --rise-tolerance),
+nonconverged_steps, energy_fallbacks, paper_fallbacks, newton_iterations, at_rest (runs whose kinetic energy is below 1e-4 J at the
 end). Then, with both schemes measured, one line per (case, h) with the wall-time ratio rattle / paper.
 """
 import argparse
@@ -80,38 +80,67 @@ def drop_start(model, index, seed):
     return state
 
 
-def mechanical_energy(model, state):
-    """Kinetic plus gravitational energy, J."""
+def energies(model, state):
+    """(kinetic, gravitational) energy, J."""
     g = model.gravity
     potential = 0.0
     for slot, body in enumerate(model.moving_bodies):
         potential -= model.mass(body) * float(np.dot(g, state.q[7 * slot:7 * slot + 3]))
-    return implicit_sim.kinetic_energy(model, state) + potential
+    return implicit_sim.kinetic_energy(model, state), potential
+
+
+def mechanical_energy(model, state):
+    """Kinetic plus gravitational energy, J."""
+    return sum(energies(model, state))
+
+
+def guard_allowance(model, kinetic_start, kinetic_end, gravity_work, first_order_share=0.0):
+    """The energy guard's allowance for a step of a scene whose only external force is gravity (doc/method.md, "The
+    energy guard"), computed here independently of the simulator (J): a share of the energy in motion, 1 % for the
+    RATTLE step and 1 % + first_order_share for the paper's first-order step (h times the largest angular speed: its
+    rotation takes the inertia at one end of the step), and the work of the weights over 1e-8 m."""
+    weight = sum(model.mass(b) for b in model.moving_bodies) * float(np.linalg.norm(model.gravity))
+    share = 0.01 + first_order_share
+    return share * (max(kinetic_start, kinetic_end) + abs(gravity_work)) + 1e-8 * weight
+
+
+def largest_angular_speed(model, *states):
+    """rad/s, over the moving bodies of the given states."""
+    return max(float(np.linalg.norm(s.v[6 * k + 3:6 * k + 6])) for s in states for k in range(model.num_moving))
 
 
 class Tally:
     def __init__(self, case, scheme, h):
         self.row = {"case": case, "scheme": scheme, "h_s": h, "runs": 0, "steps": 0, "wall_time_s": 0.0,
                     "rising_steps": 0, "rising_steps_1pct": 0, "largest_step_rise_J": 0.0, "runs_above_start": 0,
-                    "nonconverged_steps": 0, "energy_fallbacks": 0, "newton_iterations": 0, "at_rest": 0}
+                    "guard_violations": 0, "nonconverged_steps": 0, "energy_fallbacks": 0, "paper_fallbacks": 0, "newton_iterations": 0, "at_rest": 0}
 
     def run(self, model, options, state, duration, tolerance):
         row = self.row
         data = implicit_sim.Data(model)
-        energy_start = energy = mechanical_energy(model, state)
+        kinetic, potential = energies(model, state)
+        energy_start = energy = kinetic + potential
         started = time.perf_counter()
         steps = int(round(duration / options.h))
         for _ in range(steps):
+            omega_start = largest_angular_speed(model, state)
             report = implicit_sim.step(model, options, state, data)
             row["steps"] += 1
             row["newton_iterations"] += report.iterations
-            row["energy_fallbacks"] += getattr(report, "energy_fallbacks", 0)
+            row["energy_fallbacks"] += report.energy_fallbacks
+            row["paper_fallbacks"] += report.paper_fallbacks
             if not report.converged:
                 row["nonconverged_steps"] += 1
             if not report.advanced:
                 break
-            energy_next = mechanical_energy(model, state)
+            kinetic_next, potential_next = energies(model, state)
+            energy_next = kinetic_next + potential_next
             rise = energy_next - energy
+            first_order = options.h * max(omega_start, largest_angular_speed(model, state)) \
+                if options.scheme == "paper" or report.paper_fallbacks else 0.0  # the step the paper's
+            row["guard_violations"] += rise > guard_allowance(model, kinetic, kinetic_next, potential - potential_next,
+                                                              first_order)
+            kinetic, potential = kinetic_next, potential_next
             row["rising_steps"] += rise > tolerance
             row["rising_steps_1pct"] += rise > 0.01 * abs(energy_start)
             row["largest_step_rise_J"] = max(row["largest_step_rise_J"], rise)
