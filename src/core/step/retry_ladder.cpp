@@ -150,10 +150,18 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
   if (warm.converged) return warm;
   // Rung 1a: the problem's fallback formulation (RATTLE stage 1: every pair on its end-of-step frame; a start frame on
   // the wrong feature, a polygon that tips onto its next face within the step, can leave stage 1 without a solution).
+  // Where the fallback fails too (a landing pile's island, whose end frames are the harder problem), the first
+  // formulation gets its full budget before the later rungs, which run on the fallback.
   if (problem.UseFallbackFrames() > 0) {
     report->end_frame_retries++;
     warm = SolveFromStart(options, &ladder);
     if (warm.converged) return warm;
+    if (warm_options.newton.max_iterations < options.newton.max_iterations && problem.RestoreFrames() > 0) {
+      const NcpSummary full = SolveFromStart(options, &ladder);
+      if (full.converged) return full;
+      problem.UseFallbackFrames();
+      if (full.residual < warm.residual) warm = full;
+    }
   }
   island->z_best = island->z;  // the failed warm attempt (or the projected one, if better)
   // Every rung from here on projects the multipliers (with projected_retries): they start where the plain rows failed.

@@ -100,6 +100,7 @@ void RattlePositionProblem::SetStartFrames(const Eigen::VectorXd& z_start, const
     use_start_frame_[c] = feature1.dimension + feature2.dimension < 3;
     drift_limit_[c] = {DriftLimit(blk.body1, feature1), DriftLimit(blk.body2, feature2)};
   }
+  chosen_start_frame_ = use_start_frame_;
 }
 
 double RattlePositionProblem::DriftLimit(int local, const ContactFeature& feature) const {
@@ -153,6 +154,15 @@ int RattlePositionProblem::UseFallbackFrames() {
   for (char& use : use_start_frame_) {
     count += use;
     use = 0;
+  }
+  return count;
+}
+
+int RattlePositionProblem::RestoreFrames() {
+  int count = 0;
+  for (size_t c = 0; c < use_start_frame_.size(); ++c) {
+    count += chosen_start_frame_[c] && !use_start_frame_[c];
+    use_start_frame_[c] = chosen_start_frame_[c];
   }
   return count;
 }

@@ -45,6 +45,7 @@ class RattlePositionProblem final : public StepProblem {
   // Every pair on the end-of-step frame (rung 1a); returns how many had a start frame.
   int UseFallbackFrames() override;
   bool HasFallbackFrames() const override;
+  int RestoreFrames() override;
   // The state's velocities; without pairs or joints (a body in free flight) v_half = v0 + h f / (2 m), the solution of
   // its linear rows, so that a falling body's stage 1 needs no Newton iteration for them.
   void SeedVelocities(const State& state, Eigen::VectorXd* z) const override;
@@ -63,6 +64,7 @@ class RattlePositionProblem final : public StepProblem {
   const std::vector<JointDrive>& drives_;
   const bool regular_separated_friction_;
   std::vector<char> use_start_frame_;  // per block: stage 1 acts along the start frame
+  std::vector<char> chosen_start_frame_;  // per block: use_start_frame_ as SetStartFrames chose it
   std::vector<std::array<double, 2>> drift_limit_;  // per block with a start frame, per body: DriftLimit (m)
   Eigen::VectorXd frame_z_;            // the start-of-step solution the start frames come from
 };

@@ -48,6 +48,8 @@ class StepProblem : public NcpProblem {
   virtual int UseFallbackFrames() { return 0; }
   // Whether the problem has such a fallback formulation it has not switched to yet.
   virtual bool HasFallbackFrames() const { return false; }
+  // Back to the first formulation after UseFallbackFrames; returns how many pairs it changed.
+  virtual int RestoreFrames() { return 0; }
   // The contact quantities of every pair for a solution z (one entry per block, in block order).
   void Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>* out) const;
 
