@@ -157,10 +157,11 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
     warm = SolveFromStart(options, &ladder);
     if (warm.converged) return warm;
     if (warm_options.newton.max_iterations < options.newton.max_iterations && problem.RestoreFrames() > 0) {
+      island->z_best = island->z;  // the fallback's attempt, which the later rungs continue from
       const NcpSummary full = SolveFromStart(options, &ladder);
       if (full.converged) return full;
       problem.UseFallbackFrames();
-      if (full.residual < warm.residual) warm = full;
+      island->z = island->z_best;
     }
   }
   island->z_best = island->z;  // the failed warm attempt (or the projected one, if better)

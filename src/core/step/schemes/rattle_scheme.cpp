@@ -28,16 +28,23 @@ void RattleScheme::BeginStep(IslandSolve* island) {
 bool RattleScheme::FinishStep(const StepperOptions& options, bool converged, IslandSolve* island,
                               StepReport* report) {
   stage1_seed_ = island->z_start;  // the ladder's starting iterate (stage 2's ladder reuses z_start)
-  const bool solved = converged && position_.FallBackWhereFramesMoved(island->z) > 0
-                          ? SolveStagesAgain(options, island, report)
-                          : SolveVelocityStage(options, island, report) && converged;
-  if (!solved) return false;
-  if (EnergyHolds(*island)) return true;
-  // The energy guard: the cheap paths, not the retry ladder.
-  report->energy_fallbacks++;
-  if (position_.UseFallbackFrames() > 0 && SolveStagesAgain(options, island, report) && EnergyHolds(*island)) {
-    return true;
+  if (!converged) {  // the shortest sub-step's best iterate: its velocities, and the step reported as not converged
+    SolveVelocityStage(options, island, report);
+    return false;
   }
+  // Pairs whose start frame turned out stale: stage 1 again from its solution, which is close.
+  const bool solved = position_.FallBackWhereFramesMoved(island->z) > 0 ? SolveStagesAgain(options, island, report)
+                                                                        : SolveVelocityStage(options, island, report);
+  if (solved) {
+    if (EnergyHolds(*island)) return true;
+    // The energy guard: the cheap paths, not the retry ladder.
+    report->energy_fallbacks++;
+    island->z = stage1_seed_;
+    if (position_.UseFallbackFrames() > 0 && SolveStagesAgain(options, island, report) && EnergyHolds(*island)) {
+      return true;
+    }
+  }
+  // A re-solve that failed, or a step that still creates energy: the paper's step for the island.
   report->paper_fallbacks++;
   paper_step_ = true;
   island->z = stage1_seed_;
@@ -47,7 +54,6 @@ bool RattleScheme::FinishStep(const StepperOptions& options, bool converged, Isl
 }
 
 bool RattleScheme::SolveStagesAgain(const StepperOptions& options, IslandSolve* island, StepReport* report) {
-  island->z = stage1_seed_;
   const NcpSummary again = position_solvers_.For(position_).Solve(position_, options.newton, &island->z);
   report->iterations += again.iterations;
   report->residual_evaluations += again.residual_evaluations;

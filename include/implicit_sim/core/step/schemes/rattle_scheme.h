@@ -3,7 +3,8 @@
 //     active inequalities changed fall back to the end frame and stage 1 is solved again;
 //   stage 2 (problems/rattle_velocity.h) from stage 1 repeated, by its own short ladder (SolveFromGuess);
 //   the energy guard (energy_guard.h): a step that creates energy is solved again with every pair on its end frame,
-//     and if that still fails, as the paper's step (problems/paper_step.h), which dissipates.
+//     and if that still fails, as the paper's step (problems/paper_step.h), which dissipates; so is a step whose
+//     re-solve after stale start frames fails.
 // IslandSolve::z keeps stage 1's solution (the poses, and the warm start of the next step); stage 2's is velocities_.
 // After the paper's fallback, IslandSolve::z holds the paper step's solution, poses and velocities.
 #pragma once
@@ -31,7 +32,7 @@ class RattleScheme final : public IslandScheme {
   }
 
  private:
-  // Stage 1 again from the step's seed (after its frames changed), then stage 2; whether both converged.
+  // Stage 1 again from IslandSolve::z (after its frames changed), then stage 2; whether both converged.
   bool SolveStagesAgain(const StepperOptions& options, IslandSolve* island, StepReport* report);
   // Stage 2 after a solved stage 1; whether it converged to finite velocities.
   bool SolveVelocityStage(const StepperOptions& options, IslandSolve* island, StepReport* report);
