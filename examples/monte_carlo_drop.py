@@ -18,9 +18,8 @@ down; the tilt is the angle between that axis and the downward vertical. Drop i 
 with (--seed, i), so the first N drops of a larger run are the drops of a run with --samples N.
 
 The time-stepping scheme defaults to the paper's first-order step: its numerical damping stands in for a real part's
-material damping; every drop of the default run comes to rest and none gains energy. Under the second-order RATTLE
-step a rounded part keeps rocking on its face (only impacts dissipate; doc/batch.md), so drops do not come to rest,
-and some gain energy in single converged steps (examples/README.md): try --scheme rattle --samples 12.
+material damping; every drop of the default run comes to rest and none gains energy. With --scheme rattle every drop
+comes to rest too and none gains energy, at about 3 times the wall time (examples/README.md).
 
 Run (after `source /tmp/implicit_sim_ws/devel/setup.bash`, from the repository root):
     /usr/bin/python3 examples/monte_carlo_drop.py                       # 1000 drops, seed 1
