@@ -26,7 +26,8 @@ struct StepReport {
   int projected_solves = 0;     // solves whose warm start failed and that were retried with projected multipliers
   int end_frame_retries = 0;    // RATTLE: stage-1 warm starts retried with every pair on its end-of-step frame
   int energy_fallbacks = 0;     // RATTLE: steps that failed the energy guard (energy_guard.h) and were solved again
-  int paper_fallbacks = 0;      // of those, steps whose island then took the paper's step
+  int paper_fallbacks = 0;      // RATTLE: steps whose island took the paper's step (after the energy guard, or after a
+                                // failed re-solve of stale start frames)
   int cold_restarts = 0;        // solves whose warm start failed and that were retried from a cold start
   int proximal_solves = 0;      // solves that went on to the proximal-point rung after the cold start failed
   int smoothed_solves = 0;      // solves that went on to a smoothing continuation after the cold start failed

@@ -1,10 +1,10 @@
+#include "implicit_sim/core/step/problems/rattle_position.h"
+
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include <Eigen/Eigenvalues>
-#include "implicit_sim/core/step/problems/rattle_position.h"
-
-#include <algorithm>
 
 #include "implicit_sim/core/step/rows/body_rows.h"
 #include "implicit_sim/core/step/rows/contact_rows.h"
@@ -12,7 +12,6 @@
 
 namespace implicit_sim {
 namespace pi = pair_index;
-
 namespace {
 
 // An inequality counts as active at a closest point when its multiplier exceeds this share of the largest.
@@ -33,7 +32,6 @@ bool SameActiveSet(const double* x, const double* y, int count) {
 
 // Principal curvatures below this share of 1 / (bounding radius) count as flat (a superellipsoid's face).
 constexpr double kFlatCurvatureShare = 0.1;
-
 
 // The principal curvatures (1/m) of the surface f = 0 with gradient g and Hessian H: the eigenvalues of the Hessian
 // on the tangent plane over |g|, sorted by magnitude, the normal's zero left out.

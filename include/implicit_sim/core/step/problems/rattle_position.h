@@ -6,7 +6,6 @@
 #pragma once
 
 #include <array>
-
 #include <vector>
 
 #include <Eigen/Core>
@@ -21,7 +20,7 @@ struct ContactFeature {
   int dimension = 0;    // of the set of surface points sharing the normal there, up to flat curvature: 0 at a
                         // strictly curved patch or a vertex; 1 on an edge or a cylinder's side; 2 on a (nearly) flat face
   double radius = 0.0;  // m: the largest radius of curvature of its curved surface (0 for planes alone), at most
-                        // bounding radius / kFlatCurvatureShare
+                        // 10 bounding radii (flatter counts as flat)
 };
 
 class RattlePositionProblem final : public StepProblem {
