@@ -84,11 +84,8 @@ void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, b
         const Body& body = model.bodies[problems.layout.bodies()[locals[side]]];
         if (!body.shape.IsBounded()) continue;
         const BodyStart& start = problems.kinematics.start(locals[side]);
-        Pose X_WB = Pose::Identity();
-        X_WB.linear() = start.R0;
-        X_WB.translation() = start.p0;
         Vec3 point;
-        SupportPoint(body.shape, X_WB, side == 0 ? Vec3(-n0) : n0, &point);
+        SupportPoint(body.shape, test_models::MakePose(start.p0, start.R0), side == 0 ? Vec3(-n0) : n0, &point);
         frame.segment<3>(blocks[c].offset + (side == 0 ? pair_index::kA1 : pair_index::kA2)) = point;
       }
     }

@@ -108,10 +108,14 @@ double RattlePositionProblem::DriftLimit(int local, const ContactFeature& featur
   return kLeverDriftShare * std::max(bound, feature.radius);
 }
 
-ContactFeature RattlePositionProblem::StartFeature(int local, int point, int multipliers) const {
+Vec3 RattlePositionProblem::StartPointInBody(int local, int point) const {
   const BodyStart& start = kinematics().start(local);
-  const Vec3 p_B = start.R0.transpose() * (frame_z_.segment<3>(point) - start.p0);
-  return FeatureAt(layout().model().bodies[layout().bodies()[local]].shape, p_B, &frame_z_[multipliers]);
+  return start.R0.transpose() * (frame_z_.segment<3>(point) - start.p0);
+}
+
+ContactFeature RattlePositionProblem::StartFeature(int local, int point, int multipliers) const {
+  return FeatureAt(layout().model().bodies[layout().bodies()[local]].shape, StartPointInBody(local, point),
+                   &frame_z_[multipliers]);
 }
 
 bool RattlePositionProblem::LeverStayed(const Eigen::VectorXd& z, int c) const {
@@ -120,9 +124,8 @@ bool RattlePositionProblem::LeverStayed(const Eigen::VectorXd& z, int c) const {
   const int point[2] = {blk.offset + pi::kA1, blk.offset + pi::kA2};
   for (int i = 0; i < 2; ++i) {
     if (!std::isfinite(drift_limit_[c][i])) continue;
-    const BodyStart& start = kinematics().start(local[i]);
     const Pose X_WB1 = kinematics().EndPose(layout().bodies()[local[i]], z);
-    const Vec3 p_B0 = start.R0.transpose() * (frame_z_.segment<3>(point[i]) - start.p0);
+    const Vec3 p_B0 = StartPointInBody(local[i], point[i]);
     const Vec3 p_B1 = X_WB1.linear().transpose() * (z.segment<3>(point[i]) - X_WB1.translation());
     if ((p_B1 - p_B0).norm() > drift_limit_[c][i]) return false;
   }

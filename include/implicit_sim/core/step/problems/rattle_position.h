@@ -51,6 +51,8 @@ class RattlePositionProblem final : public StepProblem {
 
  private:
   void AddRows(const RowContext& ctx) const override;
+  // The start-of-step closest point frame_z_[point..+3) in the frame of body `local` (into layout().bodies()) (m).
+  Vec3 StartPointInBody(int local, int point) const;
   // The feature of body `local` (into layout().bodies()) at its start-of-step closest point frame_z_[point..+3), with
   // the multipliers from frame_z_[multipliers].
   ContactFeature StartFeature(int local, int point, int multipliers) const;
