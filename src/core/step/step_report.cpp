@@ -25,6 +25,7 @@ constexpr std::array<StepCounter, kNumStepCounters> kCounters{{
     {"active_contacts", &R::active_contacts, kStep, false},
     {"energy_fallbacks", &R::energy_fallbacks, kSum, true},
     {"paper_fallbacks", &R::paper_fallbacks, kSum, true},
+    {"stale_frames_kept", &R::stale_frames_kept, kSum, true},
 }};
 
 }  // namespace

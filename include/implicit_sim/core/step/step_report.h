@@ -28,6 +28,8 @@ struct StepReport {
   int energy_fallbacks = 0;     // RATTLE: steps that failed the energy guard (energy_guard.h) and were solved again
   int paper_fallbacks = 0;      // RATTLE: steps whose island took the paper's step (after the energy guard, or after a
                                 // failed re-solve of stale start frames)
+  int stale_frames_kept = 0;    // RATTLE: steps whose re-solve of stale start frames failed and whose first solution,
+                                // judged by the energy guard, was kept
   int cold_restarts = 0;        // solves whose warm start failed and that were retried from a cold start
   int proximal_solves = 0;      // solves that went on to the proximal-point rung after the cold start failed
   int smoothed_solves = 0;      // solves that went on to a smoothing continuation after the cold start failed
@@ -63,7 +65,7 @@ struct StepCounter {
   CounterMerge merge;
   bool run_total;    // summed over a run into the runner's summary.json
 };
-constexpr int kNumStepCounters = 17;
+constexpr int kNumStepCounters = 18;
 const std::array<StepCounter, kNumStepCounters>& StepCounterTable();
 
 // Adds an island's report to the step's: its counters by their rows, the residuals take the largest, converged only if

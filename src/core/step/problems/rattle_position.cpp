@@ -68,6 +68,13 @@ ContactFeature FeatureAt(const ConvexShape& shape, const Vec3& p_B, const double
     shape.inequalities[k].Evaluate(p_S, &f, &g, &H);
     const Eigen::Vector2d curvature = PrincipalCurvatures(g, H);
     const int flat = (curvature[0] < flat_curvature) + (curvature[1] < flat_curvature);
+    if (shape.inequalities[k].kind == Inequality::Kind::kSuperellipsoid) {
+      // Strictly convex: its closest point is unique even on the flat middle of a face, but it travels far for a
+      // small tilt there, so a flat patch is allowed only a drift of the body's size (no radius above the bound).
+      flat_directions = 0;
+      feature.radius = std::max(feature.radius, flat > 0 ? bound : 1.0 / std::max(curvature[0], flat_curvature));
+      continue;
+    }
     flat_directions = flat_directions < 0 ? flat : std::min(flat_directions, flat);
     if (flat_curvature > 0.0) feature.radius = std::max(feature.radius, 1.0 / std::max(curvature[0], flat_curvature));
   }
@@ -133,6 +140,7 @@ bool RattlePositionProblem::LeverStayed(const Eigen::VectorXd& z, int c) const {
 }
 
 int RattlePositionProblem::FallBackWhereFramesMoved(const Eigen::VectorXd& z) {
+  frames_before_fallback_ = use_start_frame_;
   int count = 0;
   const std::vector<PairBlock>& blocks = layout().blocks();
   for (size_t c = 0; c < blocks.size(); ++c) {

@@ -32,9 +32,22 @@ bool RattleScheme::FinishStep(const StepperOptions& options, bool converged, Isl
     SolveVelocityStage(options, island, report);
     return false;
   }
-  // Pairs whose start frame turned out stale: stage 1 again from its solution, which is close.
-  const bool solved = position_.FallBackWhereFramesMoved(island->z) > 0 ? SolveStagesAgain(options, island, report)
-                                                                        : SolveVelocityStage(options, island, report);
+  // Pairs whose start frame turned out stale: stage 1 again from its solution, which is close. Where that re-solve
+  // fails (a landing island), the start-frame solution stands if the energy guard passes it: the drift rule is a
+  // preference for the better root, the guard is the law.
+  bool solved;
+  if (position_.FallBackWhereFramesMoved(island->z) > 0) {
+    start_frame_solution_ = island->z;
+    solved = SolveStagesAgain(options, island, report);
+    if (!solved) {
+      report->stale_frames_kept++;
+      position_.UndoFramesMovedFallback();
+      island->z = start_frame_solution_;
+      solved = SolveVelocityStage(options, island, report);
+    }
+  } else {
+    solved = SolveVelocityStage(options, island, report);
+  }
   if (solved) {
     if (EnergyHolds(*island)) return true;
     // The energy guard: the cheap paths, not the retry ladder.

@@ -41,6 +41,8 @@ class RattlePositionProblem final : public StepProblem {
   // start's (a vertex or face switch of a polytope), or whose contact point moved on a body by more than its drift
   // limit (LeverStayed), fall back to the end-of-step frame; returns how many.
   int FallBackWhereFramesMoved(const Eigen::VectorXd& z);
+  // The frames as they were before the last FallBackWhereFramesMoved (the ones its solution was found on).
+  void UndoFramesMovedFallback() { use_start_frame_ = frames_before_fallback_; }
   // Every pair on the end-of-step frame (rung 1a); returns how many had a start frame.
   int UseFallbackFrames() override;
   bool HasFallbackFrames() const override;
@@ -66,6 +68,7 @@ class RattlePositionProblem final : public StepProblem {
   const bool regular_separated_friction_;
   std::vector<char> use_start_frame_;  // per block: stage 1 acts along the start frame
   std::vector<char> chosen_start_frame_;  // per block: use_start_frame_ as SetStartFrames chose it
+  std::vector<char> frames_before_fallback_;  // per block: use_start_frame_ before FallBackWhereFramesMoved
   std::vector<std::array<double, 2>> drift_limit_;  // per block with a start frame, per body: DriftLimit (m)
   Eigen::VectorXd frame_z_;            // the start-of-step solution the start frames come from
 };

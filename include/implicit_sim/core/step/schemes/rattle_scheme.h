@@ -1,6 +1,7 @@
 // The two-stage RATTLE step as an island scheme (island_scheme.h; doc/method.md, "The second-order step"):
 //   stage 1 (problems/rattle_position.h) from the start frames of the warm start, by the retry ladder; its pairs whose
-//     active inequalities changed fall back to the end frame and stage 1 is solved again;
+//     active inequalities changed or whose contact point drifted fall back to the end frame and stage 1 is solved
+//     again (if that fails, the first solution is kept and the energy guard judges it);
 //   stage 2 (problems/rattle_velocity.h) from stage 1 repeated, by its own short ladder (SolveFromGuess);
 //   the energy guard (energy_guard.h): a step that creates energy is solved again with every pair on its end frame,
 //     and if that still fails, as the paper's step (problems/paper_step.h), which dissipates; so is a step whose
@@ -43,6 +44,7 @@ class RattleScheme final : public IslandScheme {
   PaperStepProblem paper_;  // the energy guard's last fallback
   NewtonSolvers position_solvers_, velocity_solvers_, paper_solvers_;
   Eigen::VectorXd stage1_seed_;           // the step's starting iterate of stage 1 (the fallbacks start from it)
+  Eigen::VectorXd start_frame_solution_;  // stage 1's solution before its stale frames were re-solved
   bool paper_step_ = false;               // this step fell back to the paper's step
   Eigen::VectorXd velocities_;            // stage 2's solution
   double position_complementarity_ = 0.0;  // stage 1's complementarity error
