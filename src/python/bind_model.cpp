@@ -108,9 +108,9 @@ void BindModel(py::module_& m) {
            [](const Model& model, int pair) {
              const FrictionParams& f = model.pairs[CheckIndex(pair, model.pairs.size(), "pair")].friction;
              return py::dict(py::arg("mu") = f.mu, py::arg("e_t") = f.e_t, py::arg("e_o") = f.e_o,
-                             py::arg("e_r") = f.e_r);
+                             py::arg("e_r") = f.e_r, py::arg("e_roll") = f.e_roll);
            },
-           py::arg("pair"), "the pair's friction: mu, e_t, e_o (-) and e_r (m)")
+           py::arg("pair"), "the pair's friction: mu, e_t, e_o (-), e_r and e_roll (m)")
       .def("pair_index",
            [](const Model& model, int body1, int body2) {
              CheckBodyIndex(model, body1);

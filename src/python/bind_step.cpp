@@ -24,9 +24,9 @@ py::dict ContactArrays(const Data& data) {
   py::array_t<int> pair(n);
   py::array_t<double> gap(n), normal_force(n), torsional_moment(n), slip_speed(n);
   py::array_t<double> p_WA1({n, py::ssize_t{3}}), p_WA2({n, py::ssize_t{3}}), n_W({n, py::ssize_t{3}}),
-      friction_force_W({n, py::ssize_t{3}});
+      friction_force_W({n, py::ssize_t{3}}), rolling_moment_W({n, py::ssize_t{3}});
   auto a1 = p_WA1.mutable_unchecked<2>(), a2 = p_WA2.mutable_unchecked<2>(), nn = n_W.mutable_unchecked<2>(),
-       ff = friction_force_W.mutable_unchecked<2>();
+       ff = friction_force_W.mutable_unchecked<2>(), rm = rolling_moment_W.mutable_unchecked<2>();
   for (py::ssize_t i = 0; i < n; ++i) {
     const ContactResult& c = data.contacts[i];
     pair.mutable_data()[i] = c.pair;
@@ -39,12 +39,13 @@ py::dict ContactArrays(const Data& data) {
       a2(i, k) = c.p_WA2[k];
       nn(i, k) = c.n_W[k];
       ff(i, k) = c.friction_force_W[k];
+      rm(i, k) = c.rolling_moment_W[k];
     }
   }
   return py::dict(py::arg("pair") = pair, py::arg("gap") = gap, py::arg("n_W") = n_W, py::arg("p_WA1") = p_WA1,
                   py::arg("p_WA2") = p_WA2, py::arg("normal_force") = normal_force,
                   py::arg("friction_force_W") = friction_force_W, py::arg("torsional_moment") = torsional_moment,
-                  py::arg("slip_speed") = slip_speed);
+                  py::arg("rolling_moment_W") = rolling_moment_W, py::arg("slip_speed") = slip_speed);
 }
 
 constexpr const char* kDataBusy = "this Data is being stepped in another thread: give each thread a Data of its own";
@@ -146,7 +147,7 @@ void BindStep(py::module_& m) {
       },
                              "the last step's contact results, one row per pair in its NCP: pair (model pair index), "
                              "gap (m), n_W (unit, body 2 to body 1), p_WA1, p_WA2 (closest points, m), normal_force "
-                             "(N), friction_force_W (on body 1, N), torsional_moment (N m), slip_speed (m/s)")
+                             "(N), friction_force_W (on body 1, N), torsional_moment (N m), rolling_moment_W (on body 1, N m), slip_speed (m/s)")
       .def_property_readonly("has_warm_start", [](const PyData& d) { return d.data.has_warm_start; })
       .def_property_readonly("broad_phase", [](const PyData& d) { return d.data.broad_phase; })
       .def_property_readonly("joint_limit_effort", [](const PyData& d) {

@@ -293,12 +293,13 @@ void CheckNothingDropped(const tinyxml2::XMLElement* e, const urdf::Link& link) 
 }
 
 FrictionParams ReadFriction(const tinyxml2::XMLElement* e, const std::string& where, const FrictionParams& base) {
-  CheckAttributes(e, {"link1", "link2", "mu", "e_t", "e_o", "e_r"}, where);
+  CheckAttributes(e, {"link1", "link2", "mu", "e_t", "e_o", "e_r", "e_roll"}, where);
   FrictionParams f;
   f.mu = ReadScalar(e, "mu", where, 0.0, 100.0, false, base.mu, false);
   f.e_t = ReadScalar(e, "e_t", where, 0.0, 1e3, true, base.e_t, false);
   f.e_o = ReadScalar(e, "e_o", where, 0.0, 1e3, true, base.e_o, false);
   f.e_r = ReadScalar(e, "e_r", where, 0.0, 1e3, true, base.e_r, false);
+  f.e_roll = ReadScalar(e, "e_roll", where, 0.0, 1e3, false, base.e_roll, false);
   return f;
 }
 

@@ -90,6 +90,7 @@ void StepLayout::SetActivePairs(const std::vector<int>& pairs, const Eigen::Vect
     block.offset = size_;
     block.k1 = static_cast<int>(model_.bodies[model_.pairs[pair].body1].shape.inequalities.size());
     block.k2 = static_cast<int>(model_.bodies[model_.pairs[pair].body2].shape.inequalities.size());
+    block.rolling = model_.pairs[pair].friction.e_roll > 0.0 ? 2 : 0;
     block.body1 = LocalBody(model_.pairs[pair].body1);
     block.body2 = LocalBody(model_.pairs[pair].body2);
     blocks_.push_back(block);
@@ -104,7 +105,7 @@ void StepLayout::SetActivePairs(const std::vector<int>& pairs, const Eigen::Vect
     if (joint.friction > 0.0) row_kinds_[extra + (joint.limited ? 3 : 1)] = RowKind::kComplementarity;  // sigma_f
   }
   for (const PairBlock& blk : blocks_) {
-    for (int i = blk.offset + pair_index::kAlpha; i < blk.offset + blk.size(); ++i) {
+    for (int i = blk.offset + pair_index::kAlpha; i <= blk.sigma(); ++i) {
       row_kinds_[i] = RowKind::kComplementarity;
     }
     row_kinds_[blk.normal_force()] = RowKind::kForceComplementarity;  // the normal force enters as ln / Fs
@@ -193,10 +194,16 @@ void StepLayout::UpdateTangentAxes(Eigen::VectorXd* z) {
     TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
     // -v_tangential / sigma, independent of the basis.
     const Vec3 slip_dir = (*z)[off + pair_index::kSt] / fr.e_t * t + (*z)[off + pair_index::kSo] / fr.e_o * o;
+    const int roll = blocks_[c].roll();
+    const Vec3 roll_dir = blocks_[c].rolling ? Vec3((*z)[roll] * t + (*z)[roll + 1] * o) : Vec3::Zero();
     tangent_axis_[c] = LeastAlignedAxis(n);
     TangentBasis(n, tangent_axis_[c], &t, &o, &dt_dn, &do_dn);
     (*z)[off + pair_index::kSt] = fr.e_t * slip_dir.dot(t);
     (*z)[off + pair_index::kSo] = fr.e_o * slip_dir.dot(o);
+    if (blocks_[c].rolling) {
+      (*z)[roll] = roll_dir.dot(t);
+      (*z)[roll + 1] = roll_dir.dot(o);
+    }
   }
 }
 

@@ -66,7 +66,13 @@ void SeedFriction(const StepLayout& layout, const StepKinematics& kinematics, in
   Mat3 dt_dn, do_dn;
   TangentBasis(n, layout.tangent_axes()[c], &t, &o, &dt_dn, &do_dn);
   const Vec3 slip(fr.e_t * t.dot(v_rel), fr.e_o * o.dot(v_rel), fr.e_r * n.dot(s1.w0 - s2.w0));
-  const double sigma = slip.norm();
+  double sigma = slip.norm();
+  if (blk.rolling) {  // rolling resistance: the rolling rates about t and o are two more components of the slip
+    const Vec3 w_rel = s1.w0 - s2.w0;
+    const double roll[2] = {fr.e_roll * t.dot(w_rel), fr.e_roll * o.dot(w_rel)};
+    sigma = std::sqrt(slip.squaredNorm() + roll[0] * roll[0] + roll[1] * roll[1]);
+    for (int k = 0; k < 2; ++k) (*z)[blk.roll() + k] = sigma > 1e-9 ? -roll[k] / sigma : 0.0;
+  }
   z->segment<3>(off + pair_index::kSt) = sigma > 1e-9 ? Vec3(-slip / sigma) : Vec3::Zero();
   // No slip yet: sigma = 0, s = 0 would be a saddle of the merit function, so start from sigma > 0 (the rows
   // e (t.v_rel) + s sigma then determine s, and sigma moves to the slip speed or to 0 when the contact sticks).

@@ -27,6 +27,12 @@ using testing_support::StepProblems;
 // The problem of each stage (the paper's step; RATTLE's stage 1 and stage 2).
 enum class Stage { kPaper, kRattlePosition, kRattleVelocity };
 
+// The model with rolling resistance e_roll (m) on every pair.
+Model WithRollingResistance(Model model, double e_roll) {
+  for (ContactPair& pair : model.pairs) pair.friction.e_roll = e_roll;
+  return model;
+}
+
 Eigen::VectorXd BeginAtRandomPoint(const Model& model, unsigned seed, const Eigen::VectorXd* wrench,
                                    StepProblems* problems) {
   std::mt19937 rng(seed);
@@ -174,6 +180,22 @@ TEST(StepProblemJacobian, RattleVelocityProblem) {
                                            Stage::kRattleVelocity);
     ExpectJacobianMatchesFiniteDifferences(test_models::PrismOnGround(7), 34, sparse, false, 0.0, Stage::kRattleVelocity);
     ExpectJacobianMatchesFiniteDifferences(test_models::JointedRobot(), 35, sparse, false, 0.0, Stage::kRattleVelocity);
+  }
+}
+
+// Rolling resistance (two more friction components per pair, FrictionParams::e_roll) in every problem of the step,
+// dense and sparse, with projected multipliers and with the proximal term.
+TEST(StepProblemJacobian, RollingResistanceInEveryStage) {
+  for (const bool sparse : {false, true}) {
+    for (const Stage stage : {Stage::kPaper, Stage::kRattlePosition, Stage::kRattleVelocity}) {
+      const unsigned seed = 40 + static_cast<unsigned>(stage) * 2 + sparse;
+      ExpectJacobianMatchesFiniteDifferences(WithRollingResistance(test_models::EllipsoidOnGround(), 0.02), seed,
+                                             sparse, false, 0.0, stage);
+      ExpectJacobianMatchesFiniteDifferences(WithRollingResistance(test_models::BoxAndSuperellipsoid(), 0.03), seed,
+                                             sparse, true, 0.0, stage);
+      ExpectJacobianMatchesFiniteDifferences(WithRollingResistance(test_models::SphereOnTwoSpheres(), 0.01), seed,
+                                             sparse, false, stage == Stage::kPaper ? 0.7 : 0.0, stage);
+    }
   }
 }
 
@@ -363,6 +385,15 @@ TEST(StepProblem, LayoutCountsUnknownsAndRowsOfEveryPair) {
   const StepLayout layout(model);
   // 2 moving bodies x 6; pairs: box-super (13 + 6 + 1 + 2), box-ground (13 + 6 + 1 + 2), super-ground (13 + 1 + 1 + 2)
   EXPECT_EQ(layout.size(), 12 + 22 + 22 + 17);
+  // Rolling resistance adds its two fractions to a pair, as equations (the slip rows), none without it.
+  const StepLayout rolling(WithRollingResistance(model, 0.01));
+  EXPECT_EQ(rolling.size(), layout.size() + 3 * 2);
+  for (const PairBlock& blk : rolling.blocks()) {
+    EXPECT_EQ(blk.rolling, 2);
+    EXPECT_EQ(rolling.row_kinds()[blk.roll()], RowKind::kEquation);
+    EXPECT_EQ(rolling.row_kinds()[blk.sigma()], RowKind::kComplementarity);
+  }
+  for (const PairBlock& blk : layout.blocks()) EXPECT_EQ(blk.rolling, 0);
 }
 
 }  // namespace

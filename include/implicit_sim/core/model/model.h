@@ -16,6 +16,9 @@ struct FrictionParams {
   double e_t = 1.0;
   double e_o = 1.0;
   double e_r = 0.1;
+  // Rolling resistance (m): the largest rolling moment is e_roll * mu * normal force, as two more components of the
+  // friction ellipsoid (about the contact's two tangent axes); 0: none, and the pair has no rolling unknowns.
+  double e_roll = 0.0;
 };
 
 struct Body {

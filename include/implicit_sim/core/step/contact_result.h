@@ -13,6 +13,7 @@ struct ContactResult {
   double normal_force = 0.0;                         // N
   Vec3 friction_force_W = Vec3::Zero();              // tangential force on body 1 (N)
   double torsional_moment = 0.0;                     // about n (N m)
+  Vec3 rolling_moment_W = Vec3::Zero();              // rolling resistance on body 1, tangent to n (N m)
   double slip_speed = 0.0;                           // tangential relative speed at the contact (m/s)
 };
 

@@ -42,10 +42,12 @@ struct PairBlock {
   int body2 = -1;
   int k1 = 0;       // number of inequalities of body 1
   int k2 = 0;       // number of inequalities of body 2
-  int size() const { return 13 + k1 + k2 + 2; }
+  int rolling = 0;  // 2 with rolling resistance (FrictionParams::e_roll > 0): the fractions s_q1, s_q2 after sigma
+  int size() const { return 13 + k1 + k2 + 2 + rolling; }
   int beta() const { return offset + pair_index::kAlpha + k1; }
   int normal_force() const { return offset + pair_index::kAlpha + k1 + k2; }
   int sigma() const { return normal_force() + 1; }
+  int roll() const { return normal_force() + 2; }  // s_q1 (about t), s_q2 (about o); only with rolling
 };
 
 // A joint's parent (-1: the world) and child as indices into StepLayout::bodies().

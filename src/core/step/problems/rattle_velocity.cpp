@@ -62,6 +62,7 @@ void RattleVelocityProblem::Begin(const RattlePositionProblem& stage1, const Eig
   const std::vector<PairBlock>& blocks = layout.blocks();
   stage1_force_.resize(blocks.size());
   stage1_torsion_.resize(blocks.size());
+  stage1_rolling_.resize(blocks.size());
   closed_.resize(blocks.size());
   for (size_t c = 0; c < blocks.size(); ++c) {
     const PairBlock& blk = blocks[c];
@@ -75,6 +76,8 @@ void RattleVelocityProblem::Begin(const RattlePositionProblem& stage1, const Eig
     const double ln = z1[blk.normal_force()];
     stage1_force_[c] = ln * (n + fr.mu * (fr.e_t * z1[off + pi::kSt] * t + fr.e_o * z1[off + pi::kSo] * o));
     stage1_torsion_[c] = fr.mu * fr.e_r * ln * z1[off + pi::kSr] * n;
+    stage1_rolling_[c] = blk.rolling ? Vec3(fr.mu * fr.e_roll * ln * (z1[blk.roll()] * t + z1[blk.roll() + 1] * o))
+                                     : Vec3::Zero();
     closed_[c] = IsClosed(z1[off + pi::kD], ln, Fs);
     for (int k = 0; k < blk.k1 + blk.k2; ++k) row_kinds_[off + pi::kAlpha + k] = RowKind::kEquation;
     if (closed_[c]) {
@@ -172,27 +175,30 @@ void RattleVelocityProblem::AddPairRows(const RowContext& ctx, int c) const {
     }
   };
   const Vec3 zero = Vec3::Zero();
-  const double e[3] = {fr.e_t, fr.e_o, fr.e_r};
-  const Vec3 dirs[3] = {t, o, zero}, dirs_w[3] = {zero, zero, n};
-  const double rates[3] = {t.dot(v_rel), o.dot(v_rel), n.dot(w_rel)};
-  for (int k = 0; k < 3; ++k) add_rates(off + pi::kSt + k, on * e[k], dirs[k], dirs_w[k]);
+  // The components t, o, r and, with rolling resistance, the rolling about t and o.
+  FrictionRows friction;
+  friction.first_row = off + pi::kSt;
+  friction.roll_row = blk.roll();
+  friction.count = blk.rolling ? 5 : 3;
+  const double e[5] = {fr.e_t, fr.e_o, fr.e_r, fr.e_roll, fr.e_roll};
+  const Vec3 dirs[5] = {t, o, zero, zero, zero}, dirs_w[5] = {zero, zero, n, t, o};
+  const double rates[5] = {t.dot(v_rel), o.dot(v_rel), n.dot(w_rel), t.dot(w_rel), o.dot(w_rel)};
+  for (int k = 0; k < friction.count; ++k) add_rates(friction.Row(k), on * e[k], dirs[k], dirs_w[k]);
   if (closed) {  // the friction of the total: e_k rate_k + S_k sigma = 0, 0 <= sigma _|_ 1 - |S|^2 >= 0
-    FrictionRows friction;
-    friction.first_row = off + pi::kSt;
-    friction.count = 3;
     friction.sigma = blk.sigma();
     friction.sigma_value = sigma;
-    for (int k = 0; k < 3; ++k) {
+    for (int k = 0; k < friction.count; ++k) {
       friction.rate[k] = e[k] * rates[k];
-      friction.s[k] = S[k];
+      friction.s[k] = z[friction.Row(k)];
     }
     friction.slip = ProjectedSlip(mode, sigma, &friction.dslip_dsigma);
     friction.zeta = 1.0 - S.squaredNorm();
+    if (blk.rolling) friction.zeta -= friction.s[3] * friction.s[3] + friction.s[4] * friction.s[4];
     AddFrictionRows(friction, out);
   } else {  // an open pair keeps stage 1's fractions and slip (the same Jacobian entries)
-    for (int k = 0; k < 3; ++k) {
-      const int row = off + pi::kSt + k;
-      out.Phi[row] = S[k] - stage1_z_[row];
+    for (int k = 0; k < friction.count; ++k) {
+      const int row = friction.Row(k);
+      out.Phi[row] = z[row] - stage1_z_[row];
       if (want_J) {
         out.AddJ(row, row, 1.0);
         out.AddJ(row, blk.sigma(), 0.0);
@@ -201,7 +207,7 @@ void RattleVelocityProblem::AddPairRows(const RowContext& ctx, int c) const {
     out.Phi[blk.sigma()] = sigma - stage1_z_[blk.sigma()];
     if (want_J) {
       out.AddJ(blk.sigma(), blk.sigma(), 1.0);
-      for (int k = 0; k < 3; ++k) out.AddJ(blk.sigma(), off + pi::kSt + k, 0.0);
+      for (int k = 0; k < friction.count; ++k) out.AddJ(blk.sigma(), friction.Row(k), 0.0);
     }
   }
   // The normal law on the total force: 0 <= Ln / Fs _|_ n . v_rel >= 0 (m/s, like the friction rows: in metres,
@@ -223,12 +229,17 @@ void RattleVelocityProblem::AddPairRows(const RowContext& ctx, int c) const {
   const Vec3 torsion = mu * fr.e_r * Ln * S[2] * n - stage1_torsion_[c];
   const Vec3 dF_dS[3] = {mu * fr.e_t * Ln * t, mu * fr.e_o * Ln * o, zero};
   const Vec3 dtorsion_dLn = mu * fr.e_r * S[2] * n, dtorsion_dSr = mu * fr.e_r * Ln * n;
+  // The rolling moment, mu e_roll Ln (S_q1 t + S_q2 o), less stage 1's.
+  const int rq = blk.roll();
+  const Vec3 dM_dLn = blk.rolling ? Vec3(mu * fr.e_roll * (z[rq] * t + z[rq + 1] * o)) : zero;
+  const Vec3 M = Ln * dM_dLn - stage1_rolling_[c];
   for (const auto& [e_body, r, sign] : {std::make_tuple(&e1, r1, 1.0), std::make_tuple(&e2, r2, -1.0)}) {
     if (e_body->col < 0) continue;
     const int row = e_body->col;
     const double s = sign / Fs;
     out.Phi.segment<3>(row) -= s * F;
     out.Phi.segment<3>(row + 3) -= s * (r.cross(F) + torsion);
+    if (blk.rolling) out.Phi.segment<3>(row + 3) -= s * M;
     if (!want_J) continue;
     out.AddJ(row, blk.normal_force(), Vec3(-s * dF_dLn));
     out.AddJ(row + 3, blk.normal_force(), Vec3(-s * (r.cross(dF_dLn) + dtorsion_dLn)));
@@ -237,6 +248,11 @@ void RattleVelocityProblem::AddPairRows(const RowContext& ctx, int c) const {
       out.AddJ(row + 3, off + pi::kSt + k, Vec3(-s * r.cross(dF_dS[k])));
     }
     out.AddJ(row + 3, off + pi::kSr, Vec3(-s * dtorsion_dSr));
+    if (blk.rolling) {
+      out.AddJ(row + 3, blk.normal_force(), Vec3(-s * dM_dLn));
+      out.AddJ(row + 3, rq, Vec3(-s * mu * fr.e_roll * Ln * t));
+      out.AddJ(row + 3, rq + 1, Vec3(-s * mu * fr.e_roll * Ln * o));
+    }
   }
 }
 

@@ -37,10 +37,14 @@ struct ContactWrench {
   Vec3 n, F, dF_dln, dF_dst, dF_dso;
   Mat3 dF_dn;
   double lr, dlr_dln, dlr_dsr;
+  // The rolling moment M = mu e_roll ln (s_q1 t + s_q2 o) on body 1 (zero without rolling resistance, roll_col < 0).
+  int roll_col = -1;
+  Vec3 M = Vec3::Zero(), dM_dln = Vec3::Zero(), dM_dq1 = Vec3::Zero(), dM_dq2 = Vec3::Zero();
+  Mat3 dM_dn = Mat3::Zero();
   bool fixed_frame = false;  // n and the lever are constants (stage 1's start frame): no derivative by n, a or v
 };
 
-// Adds -sign * (F, r x F + lr n) / Fs to the body rows of bodies()[local] (sign +1 for body 1, -1 for body 2).
+// Adds -sign * (F, r x F + lr n + M) / Fs to the body rows of bodies()[local] (sign +1 for body 1, -1 for body 2).
 void AddContactWrench(const RowContext& ctx, int c, int local, double sign, const Vec3& r, const ContactWrench& w) {
   const BodyEnd& e = ctx.ends[local];
   if (e.col < 0) return;
@@ -52,6 +56,7 @@ void AddContactWrench(const RowContext& ctx, int c, int local, double sign, cons
   const RowWriter& out = ctx.out;
   out.Phi.segment<3>(row) -= s * w.F;
   out.Phi.segment<3>(row + 3) -= s * (r.cross(w.F) + w.lr * w.n);
+  if (w.roll_col >= 0) out.Phi.segment<3>(row + 3) -= s * w.M;
   if (!out.WantJacobian()) return;
   const Mat3 rx = Skew(r), Fx = Skew(w.F);
   const double moving = w.fixed_frame ? 0.0 : 1.0;  // a fixed frame emits the same entries, as zeros
@@ -61,8 +66,12 @@ void AddContactWrench(const RowContext& ctx, int c, int local, double sign, cons
   out.AddJ(row, off + pi::kSo, Vec3(-(s * w.dF_dso)));
   out.AddJ(row + 3, a_col, Mat3(moving * s * Fx));        // d(r x F)/da = -[F]x
   out.AddJ(row + 3, e.col, Mat3(-(moving * s * h * Fx)));  // r = a - p0 - h v
-  out.AddJ(row + 3, off + pi::kN, Mat3(-(moving * s * (rx * w.dF_dn + w.lr * Mat3::Identity()))));
-  out.AddJ(row + 3, blk.normal_force(), Vec3(-(s * (rx * w.dF_dln + w.dlr_dln * w.n))));
+  out.AddJ(row + 3, off + pi::kN, Mat3(-(moving * s * (rx * w.dF_dn + w.lr * Mat3::Identity() + w.dM_dn))));
+  out.AddJ(row + 3, blk.normal_force(), Vec3(-(s * (rx * w.dF_dln + w.dlr_dln * w.n + w.dM_dln))));
+  if (w.roll_col >= 0) {
+    out.AddJ(row + 3, w.roll_col, Vec3(-(s * w.dM_dq1)));
+    out.AddJ(row + 3, w.roll_col + 1, Vec3(-(s * w.dM_dq2)));
+  }
   out.AddJ(row + 3, off + pi::kSt, Vec3(-(s * rx * w.dF_dst)));
   out.AddJ(row + 3, off + pi::kSo, Vec3(-(s * rx * w.dF_dso)));
   out.AddJ(row + 3, off + pi::kSr, Vec3(-(s * w.dlr_dsr * w.n)));
@@ -196,10 +205,23 @@ void AddContactRows(const RowContext& ctx, int c, const ContactRowOptions& optio
   friction.gap = off + pi::kD;
   friction.dslip_dgap = options.regular_separated_friction && d > 0.0 ? 1.0 / h : 0.0;
   friction.zeta = 1.0 - st * st - so * so - sr * sr;
+  // Rolling resistance: e_roll (t_bar . w_rel) + s_q1 slip = 0 and likewise about o_bar (the averaged frame, as n_bar).
+  const bool rolling = blk.rolling > 0;
+  const Vec3 t_bar = end_weight * t + start_weight * t0, o_bar = end_weight * o + start_weight * o0;
+  const int rq = blk.roll();
+  if (rolling) {
+    friction.count = 5;
+    friction.roll_row = rq;
+    friction.rate[3] = fr.e_roll * t_bar.dot(w_rel);
+    friction.rate[4] = fr.e_roll * o_bar.dot(w_rel);
+    friction.s[3] = z[rq];
+    friction.s[4] = z[rq + 1];
+    friction.zeta -= z[rq] * z[rq] + z[rq + 1] * z[rq + 1];
+  }
   // The proximal rung's term (ncp_problem.h), weight cp in m/s per unit of s.
   const double cp = mode.raw ? 0.0 : mode.proximal_weight;
   friction.proximal_weight = cp;
-  if (cp > 0.0) friction.proximal_center = mode.proximal_center->data() + off + pi::kSt;
+  if (cp > 0.0) friction.proximal_center = mode.proximal_center;
   AddFrictionRows(friction, out);
   const int rt = off + pi::kSt, ro = off + pi::kSo, rr = off + pi::kSr;
   if (want_J) {
@@ -210,6 +232,15 @@ void AddContactRows(const RowContext& ctx, int c, const ContactRowOptions& optio
     add_rel_velocity(ro, end_weight * fr.e_o, o, start_weight * fr.e_o, o0);
     if (e1.col >= 0) add(rr, e1.col + 3, Eigen::RowVector3d(fr.e_r * n_bar.transpose()));
     if (e2.col >= 0) add(rr, e2.col + 3, Eigen::RowVector3d(-fr.e_r * n_bar.transpose()));
+    if (rolling) {
+      const Vec3 axes[2] = {t_bar, o_bar};
+      const Mat3* daxis_dn[2] = {&dt_dn, &do_dn};
+      for (int k = 0; k < 2; ++k) {
+        add(rq + k, off + pi::kN, Eigen::RowVector3d(end_weight * fr.e_roll * w_rel.transpose() * *daxis_dn[k]));
+        if (e1.col >= 0) add(rq + k, e1.col + 3, Eigen::RowVector3d(fr.e_roll * axes[k].transpose()));
+        if (e2.col >= 0) add(rq + k, e2.col + 3, Eigen::RowVector3d(-fr.e_roll * axes[k].transpose()));
+      }
+    }
   }
 
   // Non-penetration (paper eq. 11 with the signed distance d as gap): ln / Fs _|_ d.
@@ -236,6 +267,15 @@ void AddContactRows(const RowContext& ctx, int c, const ContactRowOptions& optio
   w.lr = mu * fr.e_r * ln * sr;
   w.dlr_dln = mu * fr.e_r * sr;
   w.dlr_dsr = mu * fr.e_r * ln;
+  if (rolling) {
+    const double sq1 = z[rq], sq2 = z[rq + 1], m = mu * fr.e_roll;
+    w.roll_col = rq;
+    w.dM_dln = m * (sq1 * t0 + sq2 * o0);
+    w.M = ln * w.dM_dln;
+    w.dM_dq1 = m * ln * t0;
+    w.dM_dq2 = m * ln * o0;
+    w.dM_dn = m * ln * (sq1 * dt_dn + sq2 * do_dn);
+  }
   AddContactWrench(ctx, c, blk.body1, +1.0, r1_0, w);
   AddContactWrench(ctx, c, blk.body2, -1.0, r2_0, w);
 }

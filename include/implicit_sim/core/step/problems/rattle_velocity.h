@@ -53,6 +53,7 @@ class RattleVelocityProblem final : public StepProblem {
   std::vector<RowKind> row_kinds_;   // the complementarity rows of closed pairs and limits only
   Eigen::VectorXd stage1_z_;         // stage 1's solution (the frozen closest points, ln, s, sigma)
   std::vector<Vec3> stage1_force_, stage1_torsion_;  // per block: stage 1's force on body 1 and torsion vector
+  std::vector<Vec3> stage1_rolling_;  // per block: stage 1's rolling moment on body 1 (N m; zero without e_roll)
   std::vector<char> closed_;                         // per block: closed at the end of stage 1
   // Per model joint: the gradients and the position at the end of stage 1, and which limits are closed there.
   std::vector<std::array<JointGradient, 6>> joint_equality_end_;

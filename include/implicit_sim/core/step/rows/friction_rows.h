@@ -1,5 +1,5 @@
-// The Coulomb friction rows, one emitter for contact friction (three components: t, o and the torsion r) and joint
-// friction (one component), in every problem of the step (paper eq. 10 with its typo fixed, divided by mu e ln so that
+// The Coulomb friction rows, one emitter for contact friction (three components: t, o and the torsion r; five with
+// rolling resistance: the rolling about t and o) and joint friction (one component), in every problem of the step (paper eq. 10 with its typo fixed, divided by mu e ln so that
 // it stays regular at ln = 0; doc/method.md):
 //   slip rows        rate_k + s_k slip = 0                        (k < count; rate_k = e_k times the sliding rate)
 //   ellipsoid row    FB(sigma, zeta) = 0,  zeta = 1 - sum s_k^2   (sigma _|_ the friction ellipsoid, paper eq. 5)
@@ -15,20 +15,24 @@
 namespace implicit_sim {
 
 struct FrictionRows {
-  int first_row = 0;   // the row (and unknown) of s_0; s_k at first_row + k
-  int count = 1;       // 1 (a joint) or 3 (a contact: t, o, r)
+  static constexpr int kMaxCount = 5;
+  int first_row = 0;   // the row (and unknown) of s_0; s_k at first_row + k for k < 3
+  int roll_row = -1;   // the row of s_3 (a contact's rolling about t); s_4 at roll_row + 1
+  int count = 1;       // 1 (a joint), 3 (a contact: t, o, r) or 5 (a contact with rolling resistance: t, o, r, q1, q2)
   int sigma = 0;       // the row and unknown of sigma
-  double rate[3] = {0.0, 0.0, 0.0};  // e_k times the sliding rate along component k (m/s or rad/s)
-  double s[3] = {0.0, 0.0, 0.0};     // the friction fractions s_k
+  double rate[kMaxCount] = {};  // e_k times the sliding rate along component k (m/s or rad/s)
+  double s[kMaxCount] = {};     // the friction fractions s_k
   double slip = 0.0;          // the slip speed as the slip rows read it
   double dslip_dsigma = 1.0;  // its derivative by sigma
   int gap = -1;               // the gap unknown d if slip depends on it (-1: none)
   double dslip_dgap = 0.0;
   double sigma_value = 0.0;   // sigma itself (the ellipsoid row's variable side)
   double zeta = 1.0;          // 1 - sum s_k^2, as the caller writes it
-  // The proximal rung's term (ncp_problem.h) on the slip rows: weight (m/s per unit of s) and the centre's s_k.
+  // The proximal rung's term (ncp_problem.h) on the slip rows: weight (m/s per unit of s) and the centre (the whole
+  // unknown vector, read at Row(k)).
   double proximal_weight = 0.0;
-  const double* proximal_center = nullptr;
+  const Eigen::VectorXd* proximal_center = nullptr;
+  int Row(int k) const { return k < 3 ? first_row + k : roll_row + (k - 3); }
 };
 
 // The slip speed of NcpEvalMode::project_multipliers: max(sigma, 0) on the slip rows (equal at every solution), so
