@@ -130,7 +130,7 @@ class Scene:
         self._body = element("link", [("name", "world")]) if world else []
 
     def friction(self, **values):
-        """`<friction mu e_t e_o e_r/>`: the default of every pair, or with link1 and link2 one pair's."""
+        """`<friction mu e_t e_o e_r e_roll/>`: the default of every pair, or with link1 and link2 one pair's."""
         pair = [(key, values.pop(key)) for key in ("link1", "link2") if key in values]
         self._extension += element("friction", pair + list(values.items()))
 
