@@ -147,7 +147,8 @@ void BindStep(py::module_& m) {
       },
                              "the last step's contact results, one row per pair in its NCP: pair (model pair index), "
                              "gap (m), n_W (unit, body 2 to body 1), p_WA1, p_WA2 (closest points, m), normal_force "
-                             "(N), friction_force_W (on body 1, N), torsional_moment (N m), rolling_moment_W (on body 1, N m), slip_speed (m/s)")
+                             "(N), friction_force_W (on body 1, N), torsional_moment (N m), rolling_moment_W "
+                             "(on body 1, N m), slip_speed (m/s)")
       .def_property_readonly("has_warm_start", [](const PyData& d) { return d.data.has_warm_start; })
       .def_property_readonly("broad_phase", [](const PyData& d) { return d.data.broad_phase; })
       .def_property_readonly("joint_limit_effort", [](const PyData& d) {

@@ -50,7 +50,9 @@ std::string RunSummary::ToJson() const {
     const FrictionParams& f = pairs[i].second;
     json += std::string(i == 0 ? "  \"pairs\": [\n" : "") + "    {\"name\": \"" + pairs[i].first + "\", \"mu\": " +
             FormatNumber(f.mu) + ", \"e_t\": " + FormatNumber(f.e_t) + ", \"e_o\": " + FormatNumber(f.e_o) +
-            ", \"e_r\": " + FormatNumber(f.e_r) + (f.e_roll > 0.0 ? ", \"e_roll\": " + FormatNumber(f.e_roll) : "") + "}" + (i + 1 < pairs.size() ? ",\n" : "\n  ],\n");
+            ", \"e_r\": " + FormatNumber(f.e_r) +
+            (f.e_roll > 0.0 ? ", \"e_roll\": " + FormatNumber(f.e_roll) : "") + "}" +
+            (i + 1 < pairs.size() ? ",\n" : "\n  ],\n");
   }
   json += "  \"t_end\": " + FormatNumber(t_end) + ",\n";
   json += "  \"stop_reason\": \"" + stop_reason + "\"";

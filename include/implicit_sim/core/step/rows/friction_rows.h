@@ -1,6 +1,6 @@
 // The Coulomb friction rows, one emitter for contact friction (three components: t, o and the torsion r; five with
-// rolling resistance: the rolling about t and o) and joint friction (one component), in every problem of the step (paper eq. 10 with its typo fixed, divided by mu e ln so that
-// it stays regular at ln = 0; doc/method.md):
+// rolling resistance: the rolling about t and o) and joint friction (one component), in every problem of the step
+// (paper eq. 10 with its typo fixed, divided by mu e ln so that it stays regular at ln = 0; doc/method.md):
 //   slip rows        rate_k + s_k slip = 0                        (k < count; rate_k = e_k times the sliding rate)
 //   ellipsoid row    FB(sigma, zeta) = 0,  zeta = 1 - sum s_k^2   (sigma _|_ the friction ellipsoid, paper eq. 5)
 // slip is the slip speed sigma as the rows read it (ProjectedSlip; plus max(d, 0) / h with the separated-friction
