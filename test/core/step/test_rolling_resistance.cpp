@@ -19,8 +19,8 @@ constexpr double kG = 9.81;
 
 // The sphere's motion under Coulomb friction and rolling resistance in one friction ellipsoid. With the slip
 // u = v - R w (contact point velocity along the motion, m/s) and the rolling rate w (rad/s), maximal dissipation
-// gives the force F = -mu N e_t^2 u / S and the moment M = -mu N e_roll^2 w / S, S = sqrt(e_t^2 u^2 + e_roll^2 w^2). The ratio
-// kappa = u / w stays constant when it solves
+// gives the force F = -mu N e_t^2 u / S and the moment M = -mu N e_roll^2 w / S, S = sqrt(e_t^2 u^2 + e_roll^2 w^2).
+// The ratio kappa = u / w stays constant when it solves
 //   R e_t^2 kappa^2 + (e_t^2 (I/m + R^2) - e_roll^2) kappa - R e_roll^2 = 0,
 // and then v and w fall linearly and reach zero together.
 struct RollingSphere {
