@@ -7,7 +7,7 @@ raise it, the drops that end above their start energy, the steps that did not co
 (StepReport.energy_fallbacks) and the wall time.
 
 Drops: drop i is shape kind i % 5 (box, superellipsoid, cylinder, ellipsoid, prism), friction mu = (0.2, 0.5, 1.0)
-[(i // 5) % 3], drawn from its own generator seeded with (--seed, i): an orientation uniform on SO(3), a spin of
+[(i // 5) % 3] (and rolling resistance --e-roll), drawn from its own generator seeded with (--seed, i): an orientation uniform on SO(3), a spin of
 uniform direction and magnitude in [0, 8] rad/s, the part's centre 0.1-0.3 m above the plane. Every drop runs
 --duration seconds. Piles: the given scene files, --pile-duration seconds.
 
@@ -51,9 +51,9 @@ def part_shape(kind):
     return Shape.prism(6, 0.04, 0.05)
 
 
-def drop_scene(kind, mu):
+def drop_scene(kind, mu, e_roll=0.0):
     scene = Scene(f"drop_{kind}", comment=f"a {kind} dropped on a plane, mu {mu}")
-    scene.friction(mu=mu, e_t=1, e_o=1, e_r=0.01)
+    scene.friction(mu=mu, e_t=1, e_o=1, e_r=0.01, **({"e_roll": e_roll} if e_roll > 0 else {}))
     scene.halfspace("ground")
     scene.link("part", mass=0.3, collision=part_shape(kind))
     scene.floating("part", xyz=(0, 0, 0.5))
@@ -167,13 +167,15 @@ def main(argv):
     parser.add_argument("--schemes", nargs="+", default=("paper", "rattle"))
     parser.add_argument("--piles", nargs="*", default=("scenes/pile_drop.urdf",), help="pile scene files")
     parser.add_argument("--pile-duration", type=float, default=2.0)
+    parser.add_argument("--e-roll", type=float, default=0.0, help="rolling resistance of the drops, m (default 0)")
     parser.add_argument("--rise-tolerance", type=float, default=1e-6, help="J (default 1e-6)")
     arguments = parser.parse_args(argv)
-    models = {(kind, mu): drop_scene(kind, mu) for kind in KINDS for mu in MUS}
+    models = {(kind, mu): drop_scene(kind, mu, arguments.e_roll) for kind in KINDS for mu in MUS}
     rows = []
     for h in arguments.h:
         for scheme in arguments.schemes:
             tally = Tally("drops", scheme, h)
+            tally.row["e_roll_m"] = arguments.e_roll
             for i in range(arguments.drops):
                 model = models[(KINDS[i % 5], MUS[(i // 5) % 3])]
                 tally.run(model, make_options(scheme, h), drop_start(model, i, arguments.seed), arguments.duration,

@@ -253,7 +253,7 @@ def test_the_model_reads_as_the_scene_says():
     assert model.velocity_slot(ball) == 0 and model.velocity_slot(sphere_b) == -1
     assert model.mass(ball) == 1.0 and model.shape_type(ball) == "sphere"
     assert model.pair_bodies(model.pair_index(sphere_b, ball)) == (ball, sphere_b)
-    assert model.pair_friction(0) == {"mu": 0.2, "e_t": 1.0, "e_o": 1.0, "e_r": 0.3}
+    assert model.pair_friction(0) == {"mu": 0.2, "e_t": 1.0, "e_o": 1.0, "e_r": 0.3, "e_roll": 0.0}
     assert list(model.gravity) == [0.0, 0.0, 0.0]  # P3: a constant force instead of gravity
     assert np.array_equal(model.inertia(ball), 0.4 * np.eye(3))
     vertices, triangles = implicit_sim.surface_mesh(model, sphere_b, resolution=8)

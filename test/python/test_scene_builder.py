@@ -55,7 +55,7 @@ def test_a_built_scene_loads_with_its_masses_inertias_shapes_and_friction():
     x, y, z = 0.2, 0.4, 0.6  # the solid box: I_xx = m (y^2 + z^2) / 12, ...
     assert np.allclose(np.diag(model.inertia(box)), 1.5 / 12 * np.array([y * y + z * z, x * x + z * z, x * x + y * y]))
     assert model.pair_friction(model.pair_index(box, ground))["mu"] == 0.7
-    assert model.pair_friction(model.pair_index(ball, ground)) == dict(mu=0.3, e_t=1.0, e_o=1.0, e_r=0.02)
+    assert model.pair_friction(model.pair_index(ball, ground)) == dict(mu=0.3, e_t=1.0, e_o=1.0, e_r=0.02, e_roll=0.0)
     state = implicit_sim.State.initial(model)
     slot = model.velocity_slot(ball)
     assert list(state.v[6 * slot:6 * slot + 6]) == [1, 0, 0, 0, 0, 2]
@@ -100,3 +100,27 @@ def test_names_and_comments_are_escaped_for_xml():
     urdf = scene.urdf()
     assert 'name="ball &quot;a&quot; &amp; &lt;b&gt;"' in urdf
     assert 'ball "a" & <b>' in implicit_sim.load_scene_string(urdf).body_names
+
+
+def test_rolling_resistance_is_read_and_reported_and_stops_a_rolling_ball():
+    scene = Scene("roll", comment="a ball rolling on the ground with rolling resistance")
+    scene.friction(mu=0.5, e_t=1, e_o=1, e_r=0.01, e_roll=0.005)
+    scene.halfspace("ground")
+    scene.link("ball", 1.0, collision=Shape.sphere(0.1))
+    scene.floating("ball", xyz=(0, 0, 0.1))
+    scene.body("ball", velocity=(0.3, 0, 0), angular_velocity=(0, 3, 0))  # rolling without slip
+    model = implicit_sim.load_scene_string(scene.urdf(), name="roll")
+    ball, ground = model.find_body("ball"), model.find_body("ground")
+    assert model.pair_friction(model.pair_index(ball, ground))["e_roll"] == 0.005
+    options, state, data = implicit_sim.StepperOptions(), implicit_sim.State.initial(model), implicit_sim.Data(model)
+    slot = model.velocity_slot(ball)
+    for _ in range(10):
+        assert implicit_sim.step(model, options, state, data).converged
+    moment, normal = data.contacts["rolling_moment_W"][0], data.contacts["normal_force"][0]
+    w = state.v[slot + 3:slot + 6]
+    assert moment[1] < 0 < w[1]  # against the rolling
+    assert np.linalg.norm(moment) <= 0.5 * 0.005 * normal * (1 + 1e-9)
+    assert np.linalg.norm(moment) > 0.9 * 0.5 * 0.005 * normal  # nearly all of the ellipsoid: it rolls, barely slides
+    for _ in range(250):  # about 1.7 s to stop from 3 rad/s (test_rolling_resistance.cpp's closed form)
+        assert implicit_sim.step(model, options, state, data).converged
+    assert np.abs(state.v[slot:slot + 6]).max() < 1e-9
