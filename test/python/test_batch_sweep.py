@@ -72,3 +72,48 @@ def test_a_bad_option_is_refused_with_the_cores_message(tmp_path, line, message)
 def test_dt_longer_than_the_run_is_refused(tmp_path):
     with pytest.raises(batch.UsageError, match=r"dt: must be at most stop.duration \(0.2 s\), got 0.5"):
         batch.load_sweep(write_sweep(tmp_path, "dt: 0.5\n", duration=0.2))
+
+
+def test_e_roll_is_written_into_every_friction_element_of_the_sample_scene(tmp_path):
+    sweep = batch.load_sweep(write_sweep(tmp_path, "e_roll: 0.002\nrandomize:\n  mu: [0.3, 0.7]\n"))
+    assert sweep["e_roll"] == 0.002
+    params = batch.draw_parameters(sweep, 5, batch.scene_defaults(sweep["scene"], sweep["body"]))
+    path = tmp_path / "sample.urdf"
+    batch.write_sample_scene(sweep, params, str(path))
+    model = implicit_sim.load_scene(str(path))
+    assert model_pairs(model) >= 1
+    for pair in range(model_pairs(model)):
+        friction = model.pair_friction(pair)
+        assert friction["e_roll"] == 0.002 and 0.3 <= friction["mu"] <= 0.7
+    without = batch.load_sweep(write_sweep(tmp_path, ""))
+    batch.write_sample_scene(without, batch.draw_parameters(without, 5, batch.scene_defaults(without["scene"], "cube")),
+                             str(path))
+    assert implicit_sim.load_scene(str(path)).pair_friction(0)["e_roll"] == 0.0  # the scene's own (none)
+
+
+def model_pairs(model):
+    """The number of pairs of a model (pair_bodies raises past the last)."""
+    count = 0
+    while True:
+        try:
+            model.pair_bodies(count)
+        except (IndexError, ValueError):
+            return count
+        count += 1
+
+
+@pytest.mark.parametrize("extra, message", [
+    ("e_roll: -0.001\n", "e_roll: must be in [0, 1000] m, got -0.001"),
+    ("e_roll: thick\n", "e_roll: expected a number, got 'thick'"),
+])
+def test_a_bad_e_roll_is_refused_naming_the_key_and_range(tmp_path, extra, message):
+    with pytest.raises(batch.UsageError) as refused:
+        batch.load_sweep(write_sweep(tmp_path, extra))
+    assert message in str(refused.value)
+
+
+def test_e_roll_is_refused_beside_pile(tmp_path):
+    path = tmp_path / "pile.yaml"
+    path.write_text("pile:\n  n: 4\n  shape: sphere\nsamples: 1\nseed: 1\ne_roll: 0.001\nstop:\n  duration: 0.1\n")
+    with pytest.raises(batch.UsageError, match="e_roll: not allowed with pile"):
+        batch.load_sweep(str(path))
