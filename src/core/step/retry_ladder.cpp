@@ -1,5 +1,6 @@
 #include "implicit_sim/core/step/retry_ladder.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "implicit_sim/core/ncp/ipopt_ncp.h"
@@ -12,8 +13,14 @@ namespace {
 // Hessian, and halving the step is cheaper: such islands try Ipopt only as a last chance, in the shortest sub-step.
 constexpr int kIpoptFirstSizeLimit = 600;
 
-// Newton iterations of a warm attempt that has a fallback formulation (RATTLE stage 1's start frames).
+// Newton iterations of a warm attempt that has a fallback formulation (RATTLE stage 1's start frames), and the
+// residual below which such an attempt is converging to a root nearby and gets the rest of its budget.
 constexpr int kStartFrameIterations = 6;
+constexpr double kNearRootResidual = 1e-6;
+
+// Newton iterations of each warm rung of a budgeted ladder (LadderReach::kWarmRungs): a warm start converges in a few
+// where it converges at all; a step that needs more goes to its scheme's fallback.
+constexpr int kWarmRungIterations = 20;
 
 // One ladder's problem, its Newton solver, its iterate *z, the island's workspace (z_start, z_best, z_center, z_cold)
 // and the report its rungs count into. Every rung reads and writes only these.
@@ -123,8 +130,9 @@ bool IpoptThenNewton(const StepperOptions& options, Ladder* ladder, BestAttempt*
 
 NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& options, const State& state,
                                 StepProblem& problem, NewtonSolvers* solvers, IslandSolve* island, bool last_chance,
-                                StepReport* report) {
+                                LadderReach reach, StepReport* report) {
   Ladder ladder{problem, solvers->For(problem), island->z, *island, report};
+  const bool warm_rungs_only = reach == LadderReach::kWarmRungs;
   if (!island->has_warm_start) {
     SeedColdStart(model, state, problem, &island->layout, &island->z_start);
     return SolveFromStart(options, &ladder);
@@ -142,12 +150,27 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
   }
   // With a fallback formulation to go to, the warm attempt gets a short budget: a start frame that has no nearby root
   // is not found by more iterations, and the fallback usually converges in a few.
-  StepperOptions warm_options = options;
+  StepperOptions budget = options;
+  if (warm_rungs_only) budget.newton.max_iterations = std::min(options.newton.max_iterations, kWarmRungIterations);
+  StepperOptions warm_options = budget;
   if (problem.HasFallbackFrames()) {
     warm_options.newton.max_iterations = std::min(options.newton.max_iterations, kStartFrameIterations);
   }
   NcpSummary warm = SolveFromStart(warm_options, &ladder);
+  if (!warm.converged && warm.residual <= kNearRootResidual &&
+      warm_options.newton.max_iterations < budget.newton.max_iterations) {
+    NewtonOptions rest = budget.newton;
+    rest.max_iterations -= warm.iterations;
+    warm = ladder.Solve(rest);
+  }
   if (warm.converged) return warm;
+  if (warm_rungs_only) {  // rung 1a within the budget, and no further
+    if (problem.UseFallbackFrames() > 0) {
+      report->end_frame_retries++;
+      warm = SolveFromStart(budget, &ladder);
+    }
+    return warm;
+  }
   // Rung 1a: the problem's fallback formulation (RATTLE stage 1: every pair on its end-of-step frame; a start frame on
   // the wrong feature, a polygon that tips onto its next face within the step, can leave stage 1 without a solution).
   // Where the fallback fails too (a landing pile's island, whose end frames are the harder problem), the first
@@ -204,20 +227,9 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
 NcpSummary SolveFromGuess(const StepperOptions& options, const StepProblem& problem, NewtonSolvers* solvers,
                           Eigen::VectorXd* z, IslandSolve* island, StepReport* report) {
   Ladder ladder{problem, solvers->For(problem), *z, *island, report};
-  StepperOptions newton_options = options;
-  newton_options.solver = StepperOptions::Solver::kNewton;
-  island->z_start = *z;
-  NcpSummary first = SolveFromStart(newton_options, &ladder);
-  if (first.converged) return first;
-  island->z_best = *z;
-  newton_options.newton.project_multipliers = true;
-  if (ProjectedRetry(newton_options, &ladder, &first)) return first;
-  BestAttempt best(first);
-  *z = island->z_start;
-  NcpSummary summary;
-  if (SmoothingContinuation(newton_options, &ladder, &best, &summary)) return summary;
-  *z = island->z_best;
-  return best.summary();
+  NewtonOptions budget = options.newton;
+  budget.max_iterations = std::min(options.newton.max_iterations, kWarmRungIterations);
+  return ladder.Solve(budget);
 }
 
 }  // namespace implicit_sim

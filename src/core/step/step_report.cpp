@@ -26,6 +26,7 @@ constexpr std::array<StepCounter, kNumStepCounters> kCounters{{
     {"energy_fallbacks", &R::energy_fallbacks, kSum, true},
     {"paper_fallbacks", &R::paper_fallbacks, kSum, true},
     {"stale_frames_kept", &R::stale_frames_kept, kSum, true},
+    {"velocity_iterations", &R::velocity_iterations, kSum, false},
 }};
 
 }  // namespace

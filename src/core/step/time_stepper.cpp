@@ -167,46 +167,68 @@ struct IslandStepInputs {
   State* state;  // each island reads and writes only its own bodies' slots
 };
 
-// Advances the island's bodies in *state by h with its scheme (schemes/island_scheme.h); when the solve fails, by two
-// halves instead, down to h / 2^kMaxSubstepDepth, where the best finite iterate is accepted and reported as not
-// converged. Returns false if the island could not be advanced.
+// The island's step by `scheme` from the start of the step (BeginStep called on its kinematics): the pose problem's
+// retry ladder (only its warm rungs if the scheme has a fallback), a cold re-solve if a body passed through another,
+// then the rest of the scheme's step, after a converged solve or after the best one of the shortest sub-step (which is
+// then accepted). Sets *crossed if the solution still crosses.
+NcpSummary SolveIslandStep(const IslandStepInputs& in, IslandScheme& scheme, bool last_chance, IslandSolve* island,
+                           bool* crossed) {
+  const Model& model = *in.model;
+  const StepperOptions& options = *in.options;
+  const State& state = *in.state;
+  StepReport* report = &island->report;
+  scheme.BeginStep(island);
+  StepProblem& problem = scheme.pose_problem();
+  const LadderReach reach = scheme.fallback() ? LadderReach::kWarmRungs : LadderReach::kAllRungs;
+  NcpSummary result =
+      SolveWithRetryLadder(model, options, state, problem, &scheme.pose_solvers(), island, last_chance, reach, report);
+  // A solution in which a body passed through another is no solution of the step (tunnelling): solve again from a
+  // cold start (the start-of-step closest points, on the near side), and if it still crosses, split the step.
+  const auto crosses = [&]() {
+    return island->z.allFinite() && FindCrossing(model, state, island->kinematics, island->z, nullptr) >= 0;
+  };
+  *crossed = crosses();
+  if (*crossed && island->has_warm_start) {
+    island->has_warm_start = false;
+    result = SolveWithRetryLadder(model, options, state, problem, &scheme.pose_solvers(), island, last_chance, reach,
+                                  report);
+    *crossed = crosses();
+  }
+  if (*crossed) {
+    report->crossings++;
+    result.converged = false;
+  }
+  if (island->z.allFinite() && (result.converged || last_chance)) {
+    result.converged = scheme.FinishStep(options, result.converged, island, report);
+  }
+  return result;
+}
+
+// Advances the island's bodies in *state by h with its scheme (schemes/island_scheme.h), or where that does not
+// converge within its budget, with the scheme's fallback; when the solve fails, by two halves instead, down to
+// h / 2^kMaxSubstepDepth, where the best finite iterate is accepted and reported as not converged. Returns false if
+// the island could not be advanced.
 bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve* island) {
   const Model& model = *in.model;
   const StepperOptions& options = *in.options;
   State* state = in.state;
-  IslandScheme& scheme = island->SchemeFor(options.scheme);
+  IslandScheme* scheme = &island->SchemeFor(options.scheme);
   StepReport* report = &island->report;
   Eigen::VectorXd& backup = island->z_backup[depth];
   backup = island->z;
   const bool had_warm_start = island->has_warm_start;
   island->kinematics.BeginStep(*state, h, in.wrench);
-  scheme.BeginStep(island);
-  StepProblem& problem = scheme.pose_problem();
   const bool last_chance = depth == Data::kMaxSubstepDepth;
-  NcpSummary result =
-      SolveWithRetryLadder(model, options, *state, problem, &scheme.pose_solvers(), island, last_chance, report);
-  // A solution in which a body passed through another is no solution of the step (tunnelling): solve again from a
-  // cold start (the start-of-step closest points, on the near side), and if it still crosses, split the step.
-  const auto crosses = [&]() {
-    return island->z.allFinite() && FindCrossing(model, *state, island->kinematics, island->z, nullptr) >= 0;
-  };
-  bool crossed = crosses();
-  if (crossed && island->has_warm_start) {
-    island->has_warm_start = false;
-    result =
-        SolveWithRetryLadder(model, options, *state, problem, &scheme.pose_solvers(), island, last_chance, report);
-    crossed = crosses();
+  bool crossed = false;
+  NcpSummary result = SolveIslandStep(in, *scheme, last_chance, island, &crossed);
+  if (!result.converged && scheme->fallback() != nullptr) {
+    report->paper_fallbacks++;
+    island->z = backup;
+    island->has_warm_start = had_warm_start;
+    scheme = scheme->fallback();
+    result = SolveIslandStep(in, *scheme, last_chance, island, &crossed);
   }
-  if (crossed) {
-    report->crossings++;
-    result.converged = false;
-  }
-  // The rest of the step after a converged pose solve, or after the best one of the shortest sub-step (which is then
-  // accepted).
-  if (island->z.allFinite() && (result.converged || last_chance)) {
-    result.converged = scheme.FinishStep(options, result.converged, island, report);
-  }
-  const Eigen::VectorXd& z_velocity = scheme.velocity_solution(*island);
+  const Eigen::VectorXd& z_velocity = scheme->velocity_solution(*island);
   if (!result.converged && depth < Data::kMaxSubstepDepth) {
     island->z = backup;
     island->has_warm_start = had_warm_start && !crossed;
@@ -229,9 +251,9 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
   }
   report->converged = report->converged && result.converged;
   report->residual = std::max(report->residual, result.residual);
-  report->complementarity_error = std::max(report->complementarity_error, scheme.ComplementarityError(island));
+  report->complementarity_error = std::max(report->complementarity_error, scheme->ComplementarityError(island));
   // The contact results of the step: the closest points of the pose solution, the forces of the velocity solution.
-  scheme.velocity_problem().Contacts(z_velocity, &island->contacts);
+  scheme->velocity_problem().Contacts(z_velocity, &island->contacts);
   for (size_t i = 0; i < island->joints.size(); ++i) {
     island->joint_limit_effort[i] = island->layout.JointLimitEffort(z_velocity, island->joints[i]);
     island->joint_drive_effort[i] = island->layout.JointDriveEffort(z_velocity, island->joints[i]);

@@ -13,8 +13,10 @@
 //   4. Ipopt on the complementarity-penalty NLP (ncp/ipopt_ncp.h) from the best of rungs 1-2, polished by Newton.
 // Without a warm start the ladder begins at rung 2. With the Ipopt solver as the primary one it stops after rung 2.
 // When every rung fails the best finite iterate is kept; the stepper then splits the step (time_stepper.h).
-// A later stage (RATTLE's stage 2) solves from a guess by the short ladder SolveFromGuess; its failure splits the step
-// too. Every rung works on any step problem (problems/step_problem.h) and its own solvers.
+// A scheme with a fallback scheme (IslandScheme::fallback: RATTLE, whose fallback is the paper's step) climbs only
+// rungs 1 and 1a, each within a budget of Newton iterations (LadderReach::kWarmRungs); where they fail, the island's
+// step is the fallback scheme's, with every rung. Every rung works on any step problem (problems/step_problem.h) and
+// its own solvers.
 #pragma once
 
 #include "implicit_sim/core/model/model.h"
@@ -33,13 +35,16 @@ namespace implicit_sim {
 // tangent axes in the layout); does not touch the state. Counts the rungs and iterations in *report. The summary is
 // that of the accepted solve. The Ipopt rung is tried by problems of up to 600 unknowns, and by larger ones when
 // `last_chance` (the shortest sub-step): above that size it costs seconds and halving the step first is cheaper.
+enum class LadderReach {
+  kAllRungs,   // every rung
+  kWarmRungs,  // rungs 1 and 1a, each within a budget of Newton iterations (without a warm start: the cold start)
+};
 NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& options, const State& state,
                                 StepProblem& problem, NewtonSolvers* solvers, IslandSolve* island, bool last_chance,
-                                StepReport* report);
+                                LadderReach reach, StepReport* report);
 
-// The short ladder of a later stage from the guess in *z: Newton; again with projected multipliers; a smoothing
-// continuation from the guess. Leaves the best iterate in *z (island->z_start and z_best serve as workspace) and
-// counts the rungs in *report.
+// A later stage (RATTLE's stage 2) from the guess in *z: Newton within the budget of a warm rung. Leaves its iterate
+// in *z and counts its iterations in *report.
 NcpSummary SolveFromGuess(const StepperOptions& options, const StepProblem& problem, NewtonSolvers* solvers,
                           Eigen::VectorXd* z, IslandSolve* island, StepReport* report);
 

@@ -41,6 +41,7 @@ struct StepReport {
   int islands = 0;              // islands of the (last) solve (step/islands.h)
   int largest_island = 0;       // moving bodies in the largest of them
   int iterations = 0;           // Newton iterations, all attempts
+  int velocity_iterations = 0;  // RATTLE: those of them spent on the velocity stage (stage 2)
   int residual_evaluations = 0; // evaluations of Phi by the solvers (Newton's line search included), all attempts
   double residual = 0.0;        // |Phi|_2 of the accepted solution (the largest over sub-steps)
   double complementarity_error = 0.0;
@@ -65,7 +66,7 @@ struct StepCounter {
   CounterMerge merge;
   bool run_total;    // summed over a run into the runner's summary.json
 };
-constexpr int kNumStepCounters = 18;
+constexpr int kNumStepCounters = 19;
 const std::array<StepCounter, kNumStepCounters>& StepCounterTable();
 
 // Adds an island's report to the step's: its counters by their rows, the residuals take the largest, converged only if

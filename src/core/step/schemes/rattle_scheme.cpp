@@ -15,23 +15,23 @@ RattleScheme::RattleScheme(const StepLayout& layout, const StepKinematics& kinem
     : kinematics_(kinematics),
       position_(layout, kinematics, drives, /*regular_separated_friction=*/true),
       velocity_(layout, kinematics, drives),
-      paper_(layout, kinematics, drives, /*regular_separated_friction=*/true) {}
+      paper_(layout, kinematics, drives) {}
 
 // Start frames from the warm start: the previous step's closest points, at this step's start.
 void RattleScheme::BeginStep(IslandSolve* island) {
   if (!island->has_warm_start) std::fill(island->frame_known.begin(), island->frame_known.end(), 0);
   position_.SetStartFrames(island->z, island->frame_known);
   position_complementarity_ = 0.0;
-  paper_step_ = false;
+  // Sized here, so that a warm step allocates nothing even when the first step did not reach them.
+  stage1_seed_.resize(island->z.size());
+  start_frame_solution_.resize(island->z.size());
+  velocities_.resize(island->z.size());
 }
 
 bool RattleScheme::FinishStep(const StepperOptions& options, bool converged, IslandSolve* island,
                               StepReport* report) {
-  stage1_seed_ = island->z_start;  // the ladder's starting iterate (stage 2's ladder reuses z_start)
-  if (!converged) {  // the shortest sub-step's best iterate: its velocities, and the step reported as not converged
-    SolveVelocityStage(options, island, report);
-    return false;
-  }
+  if (!converged) return false;  // stage 1 within its budget failed: the paper's step
+  stage1_seed_ = island->z_start;  // the ladder's starting iterate
   // Pairs whose start frame turned out stale: stage 1 again from its solution, which is close. Where that re-solve
   // fails (a landing island), the start-frame solution stands if the energy guard passes it: the drift rule is a
   // preference for the better root, the guard is the law.
@@ -48,35 +48,25 @@ bool RattleScheme::FinishStep(const StepperOptions& options, bool converged, Isl
   } else {
     solved = SolveVelocityStage(options, island, report);
   }
-  if (solved) {
-    if (EnergyHolds(*island)) return true;
-    // The energy guard: the cheap paths, not the retry ladder.
-    report->energy_fallbacks++;
-    island->z = stage1_seed_;
-    if (position_.UseFallbackFrames() > 0 && SolveStagesAgain(options, island, report) && EnergyHolds(*island)) {
-      return true;
-    }
-  }
-  // A re-solve that failed, or a step that still creates energy: the paper's step for the island.
-  report->paper_fallbacks++;
-  paper_step_ = true;
+  if (!solved) return false;
+  if (EnergyHolds(*island)) return true;
+  // The energy guard: every pair on its end frame, then the paper's step (the fallback).
+  report->energy_fallbacks++;
   island->z = stage1_seed_;
-  const NcpSummary paper = SolveFromGuess(options, paper_, &paper_solvers_, &island->z, island, report);
-  report->residual = std::max(report->residual, paper.residual);
-  return paper.converged && island->z.allFinite();
+  return position_.UseFallbackFrames() > 0 && SolveStagesAgain(options, island, report) && EnergyHolds(*island);
 }
 
 bool RattleScheme::SolveStagesAgain(const StepperOptions& options, IslandSolve* island, StepReport* report) {
-  const NcpSummary again = position_solvers_.For(position_).Solve(position_, options.newton, &island->z);
-  report->iterations += again.iterations;
-  report->residual_evaluations += again.residual_evaluations;
+  const NcpSummary again = SolveFromGuess(options, position_, &position_solvers_, &island->z, island, report);
   return SolveVelocityStage(options, island, report) && again.converged;
 }
 
 bool RattleScheme::SolveVelocityStage(const StepperOptions& options, IslandSolve* island, StepReport* report) {
   position_complementarity_ = ComputeNcpError(position_, island->z, &island->ncp_error_rows).complementarity;
   velocity_.Begin(position_, island->z, island->ncp_error_rows, &velocities_);
+  const int iterations_before = report->iterations;
   const NcpSummary velocity = SolveFromGuess(options, velocity_, &velocity_solvers_, &velocities_, island, report);
+  report->velocity_iterations += report->iterations - iterations_before;
   report->residual = std::max(report->residual, velocity.residual);
   return velocity.converged && velocities_.allFinite();
 }
@@ -85,17 +75,7 @@ bool RattleScheme::EnergyHolds(const IslandSolve& island) const {
   return StepEnergyBalance(kinematics_, island.z, velocities_).holds();
 }
 
-const Eigen::VectorXd& RattleScheme::velocity_solution(const IslandSolve& island) const {
-  return paper_step_ ? island.z : velocities_;
-}
-
-const StepProblem& RattleScheme::velocity_problem() const {
-  if (paper_step_) return paper_;
-  return velocity_;
-}
-
 double RattleScheme::ComplementarityError(IslandSolve* island) {
-  if (paper_step_) return ComputeNcpError(paper_, island->z, &island->ncp_error_rows).complementarity;
   const NcpError velocity_error = ComputeNcpError(velocity_, velocities_, &island->ncp_error_rows);
   return std::max(position_complementarity_, velocity_error.complementarity);
 }

@@ -20,7 +20,11 @@ namespace implicit_sim {
 
 class StepProblem : public NcpProblem {
  public:
-  StepProblem(const StepLayout& layout, const StepKinematics& kinematics) : layout_(layout), kinematics_(kinematics) {}
+  // ends_ holds room for every body of the model, so that an island's first evaluation in a warm step (a fallback's
+  // problem) does not allocate.
+  StepProblem(const StepLayout& layout, const StepKinematics& kinematics) : layout_(layout), kinematics_(kinematics) {
+    ends_.reserve(layout.model().bodies.size());
+  }
   const StepLayout& layout() const { return layout_; }
   const StepKinematics& kinematics() const { return kinematics_; }
 

@@ -49,6 +49,9 @@ class IslandScheme {
   // The complementarity error of the accepted step (ncp_error.h; every stage's largest).
   virtual double ComplementarityError(IslandSolve* island) = 0;
   virtual int lm_fallbacks() const = 0;
+  // The scheme that takes the island's step where this one does not converge within the budget of the ladder's warm
+  // rungs (RATTLE: the paper's step); nullptr: none, this scheme climbs every rung of the ladder.
+  virtual IslandScheme* fallback() { return nullptr; }
 };
 
 // The strategy of `scheme` for an island (its layout, kinematics and the drives it reads: IslandSolve's).
