@@ -65,6 +65,8 @@ def parse_arguments(argv):
                         help="superellipsoid exponent p in [2, 100]: larger is a sharper box (default 10)")
     parser.add_argument("--mass", type=float, default=0.5, help="kg (default 0.5)")
     parser.add_argument("--mu", type=float, default=0.5, help="friction coefficient with the ground (default 0.5)")
+    parser.add_argument("--e-roll", type=float, default=0.0,
+                        help="rolling resistance with the ground, m (default 0: none)")
     parser.add_argument("--height", type=float, default=0.1,
                         help="height of the part's lowest point at release, m (default 0.1)")
     parser.add_argument("--spin-max", type=float, default=5.0,
@@ -88,17 +90,19 @@ def parse_arguments(argv):
         parser.error("--samples must be at least 1")
     if min(arguments.half_extents) <= 0 or arguments.height < 0:
         parser.error("--half-extents must be > 0 and --height >= 0")
+    if not 0 <= arguments.e_roll <= 1000:
+        parser.error(f"--e-roll must be in [0, 1000] m, got {arguments.e_roll}")
     return arguments
 
 
-def part_scene(half_extents, exponent, mass, mu):
+def part_scene(half_extents, exponent, mass, mu, e_roll=0.0):
     """URDF text: the rounded box `part` on a floating joint above the ground plane z = 0 (doc/scenes.md)."""
     a, b, c = half_extents
     scene = Scene("part_drop", comment=f"examples/monte_carlo_drop.py: a rounded box (superellipsoid, half extents {a} "
                   f"{b} {c} m, exponent {exponent},\n     {mass} kg, inertia of the uniform solid) dropped on the "
                   f"ground plane z = 0; mu = {mu}, e_t = e_o = 1,\n     e_r = 0.01 m. The script sets the part's initial pose "
                   "and twist per drop.")
-    scene.friction(mu=mu, e_t=1, e_o=1, e_r=0.01)
+    scene.friction(mu=mu, e_t=1, e_o=1, e_r=0.01, **({"e_roll": e_roll} if e_roll > 0 else {}))
     scene.halfspace("ground")
     scene.link(PART, mass, visual=Shape.box((2 * a, 2 * b, 2 * c)),
                collision=Shape.superellipsoid((a, b, c), exponent))  # the inertia from the mass (closed form)
@@ -286,7 +290,7 @@ def main(argv=None):
     arguments = parse_arguments(argv)
     out = pathlib.Path(arguments.out)
     out.mkdir(parents=True, exist_ok=True)
-    scene_text = part_scene(arguments.half_extents, arguments.exponent, arguments.mass, arguments.mu)
+    scene_text = part_scene(arguments.half_extents, arguments.exponent, arguments.mass, arguments.mu, arguments.e_roll)
     (out / "part_drop.urdf").write_text(scene_text)
     model = implicit_sim.load_scene_string(scene_text, name="part_drop")
     options = implicit_sim.StepperOptions()

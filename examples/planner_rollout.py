@@ -105,8 +105,8 @@ def parse_arguments(argv):
                         help="s: the score's weight of the slip speed at the end of the horizon (default 0.2)")
     parser.add_argument("--max-decisions", type=int, default=60, help="give up after this many (default 60)")
     parser.add_argument("--h", type=float, default=0.005, help="time step, s (default 0.005)")
-    parser.add_argument("--scheme", choices=("rattle", "paper"), default="paper",
-                        help="time-stepping scheme (default paper: see examples/README.md)")
+    parser.add_argument("--scheme", choices=("rattle", "paper"), default="rattle",
+                        help="time-stepping scheme (default rattle, the simulator's default)")
     parser.add_argument("--quick", action="store_true",
                         help="target (0.25, 0.1) m and 15 candidates (for tests)")
     parser.add_argument("--out", default="examples_output/planner_rollout", help="output directory")

@@ -1,5 +1,5 @@
-// implicit_sim_make_pile --n N --shape sphere|ellipsoid [--seed S] [--orientation aligned|random] --out FILE: writes
-// the S1 pile scene.
+// implicit_sim_make_pile --n N --shape sphere|ellipsoid [--seed S] [--orientation aligned|random] [--e-roll M]
+// --out FILE: writes the S1 pile scene (with rolling resistance M, in m, on its friction when M > 0).
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
@@ -10,11 +10,13 @@
 
 int main(int argc, char** argv) {
   const char* usage =
-      "usage: implicit_sim_make_pile --n N --shape sphere|ellipsoid [--seed S] [--orientation aligned|random] --out FILE";
+      "usage: implicit_sim_make_pile --n N --shape sphere|ellipsoid [--seed S] [--orientation aligned|random] "
+      "[--e-roll M] --out FILE";
   std::map<std::string, std::string> values;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
-    if ((flag != "--n" && flag != "--shape" && flag != "--seed" && flag != "--orientation" && flag != "--out") ||
+    if ((flag != "--n" && flag != "--shape" && flag != "--seed" && flag != "--orientation" && flag != "--e-roll" &&
+         flag != "--out") ||
         i + 1 >= argc) {
       std::cerr << "implicit_sim_make_pile: bad argument '" << flag << "' (" << usage << ")\n";
       return 2;
@@ -39,11 +41,21 @@ int main(int argc, char** argv) {
     std::cerr << "implicit_sim_make_pile: --orientation must be aligned or random, got '" << orientation << "'\n";
     return 2;
   }
+  double e_roll = 0.0;
+  if (values.count("--e-roll")) {
+    e_roll = std::strtod(values["--e-roll"].c_str(), &end);
+    if (values["--e-roll"].empty() || *end != '\0' || !(e_roll >= 0.0 && e_roll <= 1000.0)) {
+      std::cerr << "implicit_sim_make_pile: --e-roll must be a number in [0, 1000] m, got '" << values["--e-roll"]
+                << "'\n";
+      return 2;
+    }
+  }
   // The generator's std::mt19937 takes the seed modulo 2^32.
   const std::string urdf = implicit_sim::MakePileUrdf(
       static_cast<int>(n), shape == "sphere" ? implicit_sim::PileShape::kSphere : implicit_sim::PileShape::kEllipsoid,
       static_cast<unsigned>(seed), true,
-      orientation == "random" ? implicit_sim::PileOrientation::kRandom : implicit_sim::PileOrientation::kAligned);
+      orientation == "random" ? implicit_sim::PileOrientation::kRandom : implicit_sim::PileOrientation::kAligned,
+      e_roll);
   std::ofstream out(values["--out"]);
   out << urdf;
   if (!out) {

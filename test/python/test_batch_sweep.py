@@ -2,6 +2,7 @@
 check (doc/batch.md, "Step options"), and a sample's runner command carries them."""
 import importlib.machinery
 import importlib.util
+import xml.etree.ElementTree as ET
 
 import pytest
 
@@ -112,8 +113,13 @@ def test_a_bad_e_roll_is_refused_naming_the_key_and_range(tmp_path, extra, messa
     assert message in str(refused.value)
 
 
-def test_e_roll_is_refused_beside_pile(tmp_path):
+def test_e_roll_of_a_pile_sweep_reaches_every_friction_of_its_generated_scene(tmp_path, runner):
     path = tmp_path / "pile.yaml"
     path.write_text("pile:\n  n: 4\n  shape: sphere\nsamples: 1\nseed: 1\ne_roll: 0.001\nstop:\n  duration: 0.1\n")
-    with pytest.raises(batch.UsageError, match="e_roll: not allowed with pile"):
-        batch.load_sweep(str(path))
+    sweep = batch.load_sweep(str(path))
+    assert sweep["e_roll"] == 0.001
+    out = tmp_path / "scene.urdf"
+    batch.write_pile_scene(sweep, 7, runner, str(out))
+    frictions = ET.parse(str(out)).getroot().find("implicit_sim").findall("friction")
+    assert frictions and all(f.get("e_roll") == "0.001" for f in frictions)
+    assert all(f.get("mu") == "0.5" for f in frictions)  # the generator's own friction, kept

@@ -37,9 +37,10 @@ Mat3 UniformRotation(double u1, double u2, double u3) {
   return q.normalized().toRotationMatrix();
 }
 
-// The pile's URDF with body i at pose X_WB[i]; `random_orientations` only changes the comment.
+// The pile's URDF with body i at pose X_WB[i] and rolling resistance e_roll (m; 0: none); `random_orientations` only
+// changes the comment.
 std::string PileUrdf(int n, PileShape shape, unsigned seed, const std::vector<Pose>& X_WB, int separated_pairs,
-                     double max_shift, bool random_orientations = false) {
+                     double max_shift, double e_roll, bool random_orientations = false) {
   const bool sphere = shape == PileShape::kSphere;
   const double mass = 0.1;
   const double a = sphere ? 0.05 : 0.06, b = sphere ? 0.05 : 0.05, c = sphere ? 0.05 : 0.04;
@@ -54,8 +55,9 @@ std::string PileUrdf(int n, PileShape shape, unsigned seed, const std::vector<Po
         << separated_pairs << " bodies moved along x, largest shift " << FormatNumber(max_shift) << " m)";
   }
   out << ". -->\n<robot name=\"s1_pile_" << n << (sphere ? "_sphere" : "_ellipsoid") << "\">\n"
-      << "  <implicit_sim gravity=\"0 0 -9.81\">\n    <friction mu=\"0.5\" e_t=\"1\" e_o=\"1\" e_r=\"0.01\"/>\n"
-      << "  </implicit_sim>\n  <link name=\"world\"/>\n";
+      << "  <implicit_sim gravity=\"0 0 -9.81\">\n    <friction mu=\"0.5\" e_t=\"1\" e_o=\"1\" e_r=\"0.01\"";
+  if (e_roll > 0.0) out << " e_roll=\"" << FormatNumber(e_roll) << "\"";
+  out << "/>\n  </implicit_sim>\n  <link name=\"world\"/>\n";
   AddHalfSpace(out, "floor", "0 0 0", "0 0 0");
   AddHalfSpace(out, "wall_px", "0.5 0 0", "0 -1.5707963267948966 0");   // occupies x >= 0.5
   AddHalfSpace(out, "wall_nx", "-0.5 0 0", "0 1.5707963267948966 0");   // occupies x <= -0.5
@@ -141,18 +143,24 @@ int SeparateRows(std::vector<Pose>* X_WB, double length) {
   return moved;
 }
 
-std::string MakePileUrdf(int n, PileShape shape, unsigned seed, bool separate_overlaps, PileOrientation orientation) {
+std::string MakePileUrdf(int n, PileShape shape, unsigned seed, bool separate_overlaps, PileOrientation orientation,
+                         double e_roll) {
   if (n < 1 || n > 100000) throw std::invalid_argument("pile size n must be in [1, 100000], got " + std::to_string(n));
-  if (orientation == PileOrientation::kRandom) return PileUrdf(n, shape, seed, RandomPileLayout(n, seed), 0, 0.0, true);
+  if (!(e_roll >= 0.0 && e_roll <= 1000.0)) {
+    throw std::invalid_argument("pile e_roll must be in [0, 1000] m, got " + FormatNumber(e_roll));
+  }
+  if (orientation == PileOrientation::kRandom) {
+    return PileUrdf(n, shape, seed, RandomPileLayout(n, seed), 0, 0.0, e_roll, true);
+  }
   std::vector<Pose> X_WB = PileLayout(n, seed);
-  const std::string layout = PileUrdf(n, shape, seed, X_WB, 0, 0.0);
+  const std::string layout = PileUrdf(n, shape, seed, X_WB, 0, 0.0, e_roll);
   if (!separate_overlaps || shape == PileShape::kSphere) return layout;  // spheres never overlap
   const std::vector<Pose> original = X_WB;
   const int separated = SeparateRows(&X_WB, 0.12);
   if (separated == 0) return layout;
   double max_shift = 0.0;
   for (int k = 0; k < n; ++k) max_shift = std::max(max_shift, (X_WB[k].translation() - original[k].translation()).norm());
-  return PileUrdf(n, shape, seed, X_WB, separated, max_shift);
+  return PileUrdf(n, shape, seed, X_WB, separated, max_shift, e_roll);
 }
 
 }  // namespace implicit_sim

@@ -2,6 +2,7 @@
 #include "implicit_sim/core/io/pile_scene.h"
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 #include <string>
 
@@ -126,6 +127,31 @@ TEST(PileScene, RandomOrientationsFollowTheSeedAndStartApart) {
     }
   }
   EXPECT_GT(close_pairs, 10);  // the check saw neighbours
+}
+
+// Rolling resistance on the pile's friction (the batch studies' e_roll): every pair gets it, the layout stays the same,
+// and a value out of range is refused naming the range.
+TEST(PileScene, RollingResistanceReachesEveryPairAndBadValuesAreRefused) {
+  const Model without = LoadSceneFromString(MakePileUrdf(5, PileShape::kEllipsoid, 3, true, PileOrientation::kRandom), "a");
+  const Model with =
+      LoadSceneFromString(MakePileUrdf(5, PileShape::kEllipsoid, 3, true, PileOrientation::kRandom, 0.002), "b");
+  ASSERT_EQ(with.pairs.size(), without.pairs.size());
+  ASSERT_FALSE(with.pairs.empty());
+  for (size_t k = 0; k < with.pairs.size(); ++k) {
+    EXPECT_EQ(with.pairs[k].friction.e_roll, 0.002) << k;
+    EXPECT_EQ(without.pairs[k].friction.e_roll, 0.0) << k;
+  }
+  for (size_t b = 0; b < with.bodies.size(); ++b) {
+    EXPECT_EQ(with.bodies[b].X_WB0.matrix(), without.bodies[b].X_WB0.matrix()) << b;
+  }
+  for (const double bad : {-0.001, 2000.0, std::nan("")}) {
+    try {
+      MakePileUrdf(5, PileShape::kSphere, 3, true, PileOrientation::kAligned, bad);
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const std::invalid_argument& error) {
+      EXPECT_NE(std::string(error.what()).find("e_roll must be in [0, 1000] m"), std::string::npos) << error.what();
+    }
+  }
 }
 
 }  // namespace

@@ -76,8 +76,7 @@ void RattleVelocityProblem::Begin(const RattlePositionProblem& stage1, const Eig
     const double ln = z1[blk.normal_force()];
     stage1_force_[c] = ln * (n + fr.mu * (fr.e_t * z1[off + pi::kSt] * t + fr.e_o * z1[off + pi::kSo] * o));
     stage1_torsion_[c] = fr.mu * fr.e_r * ln * z1[off + pi::kSr] * n;
-    stage1_rolling_[c] = blk.rolling ? Vec3(fr.mu * fr.e_roll * ln * (z1[blk.roll()] * t + z1[blk.roll() + 1] * o))
-                                     : Vec3::Zero();
+    stage1_rolling_[c] = ln * RollingMomentPerNormalForce(blk, fr, z1, t, o);
     closed_[c] = IsClosed(z1[off + pi::kD], ln, Fs);
     for (int k = 0; k < blk.k1 + blk.k2; ++k) row_kinds_[off + pi::kAlpha + k] = RowKind::kEquation;
     if (closed_[c]) {
@@ -231,7 +230,7 @@ void RattleVelocityProblem::AddPairRows(const RowContext& ctx, int c) const {
   const Vec3 dtorsion_dLn = mu * fr.e_r * S[2] * n, dtorsion_dSr = mu * fr.e_r * Ln * n;
   // The rolling moment, mu e_roll Ln (S_q1 t + S_q2 o), less stage 1's.
   const int rq = blk.roll();
-  const Vec3 dM_dLn = blk.rolling ? Vec3(mu * fr.e_roll * (z[rq] * t + z[rq + 1] * o)) : zero;
+  const Vec3 dM_dLn = RollingMomentPerNormalForce(blk, fr, z, t, o);
   const Vec3 M = Ln * dM_dLn - stage1_rolling_[c];
   for (const auto& [e_body, r, sign] : {std::make_tuple(&e1, r1, 1.0), std::make_tuple(&e2, r2, -1.0)}) {
     if (e_body->col < 0) continue;

@@ -1,5 +1,6 @@
 #include "implicit_sim/core/step/problems/step_problem.h"
 
+#include "implicit_sim/core/step/rows/friction_rows.h"
 #include "step/contact_frame.h"
 
 namespace implicit_sim {
@@ -57,8 +58,7 @@ void StepProblem::Contacts(const Eigen::VectorXd& z, std::vector<ContactResult>*
     const double mu_ln = fr.mu * out.normal_force;
     out.friction_force_W = mu_ln * (fr.e_t * z[off + pi::kSt] * t + fr.e_o * z[off + pi::kSo] * o);
     out.torsional_moment = mu_ln * fr.e_r * z[off + pi::kSr];
-    out.rolling_moment_W = blk.rolling ? Vec3(mu_ln * fr.e_roll * (z[blk.roll()] * t + z[blk.roll() + 1] * o))
-                                       : Vec3::Zero();
+    out.rolling_moment_W = out.normal_force * RollingMomentPerNormalForce(blk, fr, z, t, o);
     const BodyEnd& e1 = ends_[blk.body1];
     const BodyEnd& e2 = ends_[blk.body2];
     const Vec3 v_rel = RelativeVelocity(e1.v, e1.w, out.p_WA1 - e1.p, e2.v, e2.w, out.p_WA2 - e2.p);

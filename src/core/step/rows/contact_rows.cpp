@@ -270,7 +270,7 @@ void AddContactRows(const RowContext& ctx, int c, const ContactRowOptions& optio
   if (rolling) {
     const double sq1 = z[rq], sq2 = z[rq + 1], m = mu * fr.e_roll;
     w.roll_col = rq;
-    w.dM_dln = m * (sq1 * t0 + sq2 * o0);
+    w.dM_dln = RollingMomentPerNormalForce(blk, fr, z, t0, o0);
     w.M = ln * w.dM_dln;
     w.dM_dq1 = m * ln * t0;
     w.dM_dq2 = m * ln * o0;

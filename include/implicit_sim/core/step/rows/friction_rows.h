@@ -10,6 +10,9 @@
 
 #include <Eigen/Core>
 
+#include "implicit_sim/core/base/types.h"
+#include "implicit_sim/core/model/model.h"
+#include "implicit_sim/core/step/layout.h"
 #include "implicit_sim/core/step/rows/row_writer.h"
 
 namespace implicit_sim {
@@ -40,5 +43,13 @@ struct FrictionRows {
 double ProjectedSlip(const NcpEvalMode& mode, double sigma, double* derivative);
 
 void AddFrictionRows(const FrictionRows& rows, const RowWriter& out);
+
+// A pair's rolling moment on body 1 per newton of normal force, mu e_roll (s_q1 t + s_q2 o) (m), with the fractions
+// s_q1, s_q2 of z at PairBlock::roll() and the tangent axes t, o; zero without rolling resistance.
+inline Vec3 RollingMomentPerNormalForce(const PairBlock& blk, const FrictionParams& fr, const Eigen::VectorXd& z,
+                                        const Vec3& t, const Vec3& o) {
+  if (!blk.rolling) return Vec3::Zero();
+  return fr.mu * fr.e_roll * (z[blk.roll()] * t + z[blk.roll() + 1] * o);
+}
 
 }  // namespace implicit_sim
