@@ -402,8 +402,8 @@ TEST(PileStudy, ATinyPileSampleRunsAndItsLineHasTheReliabilityFields) {
   EXPECT_TRUE(stop == "\"duration\"" || stop == "\"at_rest\"") << line;
   // The run's scene is the generator's for the sample's seed modulo 2^32.
   const std::string seed = Field(line.substr(line.find("\"pile\"")), "seed");
-  ASSERT_EQ(Shell(kMakePile + " --n 3 --shape ellipsoid --orientation random --e-roll 0.002 --seed " + seed +
-                  " --out " + dir + "/again.urdf"),
+  ASSERT_EQ(Shell(kMakePile + " --n 3 --shape ellipsoid --orientation random --seed " + seed + " --out " + dir +
+                  "/again.urdf"),
             0);
   EXPECT_EQ(Read(out + "/runs/0/scene.urdf"), Read(dir + "/again.urdf"));
   EXPECT_NE(Read(out + "/runs/0/summary.json").find("\"max_penetration_oracle\": "), std::string::npos);
@@ -466,8 +466,7 @@ TEST(PileStudy, ThePileKeyParsesAndBadValuesAreRefusedNamingTheKey) {
   for (const char* expected : {"\"n\": 50", "\"shape\": \"ellipsoid\"", "\"orientation\": \"random\"", "\"dt\": 0.005"}) {
     EXPECT_NE(sweep_json.find(expected), std::string::npos) << expected << " in " << sweep_json;
   }
-  EXPECT_NE(sweep_json.find("\"e_roll\": 0.002"), std::string::npos);  // written into each sample's scene
-  EXPECT_EQ(sweep_json.find("\"scheme\""), std::string::npos);         // the default step
+  EXPECT_NE(sweep_json.find("\"scheme\": \"paper\""), std::string::npos);  // the runner gets it as --scheme
   const std::string good = Read(kPileSweep);
   struct Case {
     std::string name, from, to;
