@@ -18,7 +18,7 @@ Run (after `source /tmp/implicit_sim_ws/devel/setup.bash`, from the repository r
 One JSON line per (case, scheme, h): case ("drops" or the pile's file name), scheme, h_s, runs, steps, wall_time_s,
 rising_steps (steps whose energy rose by more than --rise-tolerance J), rising_steps_1pct (rose by more than 1 % of
 the run's start energy), guard_violations (rose by more than the energy guard's allowance, computed here), largest_step_rise_J, runs_above_start (end energy above start + --rise-tolerance),
-nonconverged_steps, energy_fallbacks, paper_fallbacks, newton_iterations, at_rest (runs whose kinetic energy is below 1e-4 J at the
+nonconverged_steps, energy_fallbacks, paper_fallbacks, damping_steps, newton_iterations, at_rest (runs whose kinetic energy is below 1e-4 J at the
 end). Then, with both schemes measured, one line per (case, h) with the wall-time ratio rattle / paper.
 """
 import argparse
@@ -113,7 +113,8 @@ class Tally:
     def __init__(self, case, scheme, h):
         self.row = {"case": case, "scheme": scheme, "h_s": h, "runs": 0, "steps": 0, "wall_time_s": 0.0,
                     "rising_steps": 0, "rising_steps_1pct": 0, "largest_step_rise_J": 0.0, "runs_above_start": 0,
-                    "guard_violations": 0, "nonconverged_steps": 0, "energy_fallbacks": 0, "paper_fallbacks": 0, "newton_iterations": 0, "at_rest": 0}
+                    "guard_violations": 0, "nonconverged_steps": 0, "energy_fallbacks": 0, "paper_fallbacks": 0, "damping_steps": 0, "newton_iterations": 0,
+                    "at_rest": 0}
 
     def run(self, model, options, state, duration, tolerance):
         row = self.row
@@ -129,6 +130,7 @@ class Tally:
             row["newton_iterations"] += report.iterations
             row["energy_fallbacks"] += report.energy_fallbacks
             row["paper_fallbacks"] += report.paper_fallbacks
+            row["damping_steps"] += report.damping_steps
             if not report.converged:
                 row["nonconverged_steps"] += 1
             if not report.advanced:
@@ -137,7 +139,7 @@ class Tally:
             energy_next = kinetic_next + potential_next
             rise = energy_next - energy
             first_order = options.h * max(omega_start, largest_angular_speed(model, state)) \
-                if options.scheme == "paper" or report.paper_fallbacks else 0.0  # the step the paper's
+                if options.scheme == "paper" or report.paper_fallbacks or report.damping_steps else 0.0  # the paper's step
             row["guard_violations"] += rise > guard_allowance(model, kinetic, kinetic_next, potential - potential_next,
                                                               first_order)
             kinetic, potential = kinetic_next, potential_next

@@ -52,6 +52,8 @@ void AddWarmStart(std::string* out, const WarmStart& warm) {
   for (const Vec3& axis : warm.tangent_axes) {
     *out += FormatNumber(axis.x()) + ' ' + FormatNumber(axis.y()) + ' ' + FormatNumber(axis.z()) + '\n';
   }
+  AddLine(out, "velocity_reversals", std::to_string(warm.velocity_reversals.size()));
+  for (int count : warm.velocity_reversals) *out += std::to_string(count) + '\n';
 }
 
 }  // namespace

@@ -60,6 +60,11 @@ class CaseReader {
     return value;
   }
 
+  // Whether the next line starts with "<key> " (without reading it).
+  bool NextKeyIs(const std::string& key) const {
+    return pos_ < text_.size() && text_.compare(pos_, key.size() + 1, key + " ") == 0;
+  }
+
   // "<key> <count>": a count of lines that follow, each at least 2 bytes long.
   int Count(const std::string& key) {
     const long count = Integer(Value(key, "<count>"), key + " count");
@@ -176,6 +181,17 @@ void ReadWarmStart(CaseReader* in, WarmStart* warm) {
     const std::vector<std::string> tokens = SplitOnSpaces(in->NextLine(what + " 'x y z'"));
     if (tokens.size() != 3) in->Fail("expected " + what + " as 'x y z'");
     for (int k = 0; k < 3; ++k) warm->tangent_axes[i][k] = in->Number(tokens[k], what, warm->valid);
+  }
+  // Cases captured before the RATTLE damping (Data::velocity_reversals) have none: every count 0.
+  warm->velocity_reversals.clear();
+  if (!in->NextKeyIs("velocity_reversals")) return;
+  const int num_slots = in->Count("velocity_reversals");
+  warm->velocity_reversals.resize(num_slots);
+  for (int i = 0; i < num_slots; ++i) {
+    const std::string what = "velocity_reversals[" + std::to_string(i) + "]";
+    const long count = in->Integer(in->NextLine(what), what);
+    if (count < 0 || count > 1000000) in->Fail(what + " must be in [0, 1000000], got " + std::to_string(count));
+    warm->velocity_reversals[i] = static_cast<int>(count);
   }
 }
 

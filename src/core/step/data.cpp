@@ -30,6 +30,7 @@ Data::Data(const Model& model, PairSelection selection)
       z(Eigen::VectorXd::Zero(layout.size())),
       island_root(model.num_moving()),
       island_of_slot(model.num_moving()),
+      velocity_reversals(model.num_moving(), 0),
       broad(MakeBroadPhase(model)),
       X_WB(model.bodies.size(), Pose::Identity()),
       inflation(model.bodies.size(), 0.0),
@@ -85,6 +86,7 @@ void SaveWarmStart(const Data& data, WarmStart* out) {
   for (size_t j = 0; j < driven.size(); ++j) {
     if (driven[j]) out->driven_joints.push_back(static_cast<int>(j));
   }
+  out->velocity_reversals = data.velocity_reversals;
 }
 
 void RestoreWarmStart(const Model& model, const WarmStart& saved, Data* data) {
@@ -102,8 +104,13 @@ void RestoreWarmStart(const Model& model, const WarmStart& saved, Data* data) {
                            return j >= 0 && j < static_cast<int>(model.joints.size()) &&
                                   model.joints[j].has_coordinate();
                          });
-  if (!pairs_ok || saved.tangent_axes.size() != saved.pairs.size() || !driven_ok) {
-    throw std::invalid_argument("warm start does not belong to this model (pairs, tangent axes or driven joints)");
+  const std::vector<int>& reversals = saved.velocity_reversals;
+  const bool reversals_ok =
+      (reversals.empty() || static_cast<int>(reversals.size()) == model.num_moving()) &&
+      std::all_of(reversals.begin(), reversals.end(), [](int count) { return count >= 0; });
+  if (!pairs_ok || saved.tangent_axes.size() != saved.pairs.size() || !driven_ok || !reversals_ok) {
+    throw std::invalid_argument(
+        "warm start does not belong to this model (pairs, tangent axes, driven joints or velocity reversals)");
   }
   // The layout of saved.z; kept_driven: the layout of data->z, restored if saved.z does not fit.
   const std::vector<char> kept_driven = data->layout.driven_joints();
@@ -124,6 +131,11 @@ void RestoreWarmStart(const Model& model, const WarmStart& saved, Data* data) {
   data->z = saved.z;
   data->layout.set_tangent_axes(saved.tangent_axes);
   data->has_warm_start = saved.valid;
+  if (reversals.empty()) {
+    std::fill(data->velocity_reversals.begin(), data->velocity_reversals.end(), 0);
+  } else {
+    data->velocity_reversals = reversals;
+  }
 }
 
 void ClearWarmStart(Data* data) {
@@ -131,6 +143,7 @@ void ClearWarmStart(Data* data) {
   data->z.setZero(data->layout.size());
   data->has_warm_start = false;
   data->forced_pairs.clear();
+  std::fill(data->velocity_reversals.begin(), data->velocity_reversals.end(), 0);
 }
 
 }  // namespace implicit_sim

@@ -27,6 +27,7 @@ constexpr std::array<StepCounter, kNumStepCounters> kCounters{{
     {"paper_fallbacks", &R::paper_fallbacks, kSum, true},
     {"stale_frames_kept", &R::stale_frames_kept, kSum, true},
     {"velocity_iterations", &R::velocity_iterations, kSum, false},
+    {"damping_steps", &R::damping_steps, kSum, true},
 }};
 
 }  // namespace

@@ -213,6 +213,7 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
   const StepperOptions& options = *in.options;
   State* state = in.state;
   IslandScheme* scheme = &island->SchemeFor(options.scheme);
+  if (island->damping && scheme->fallback() != nullptr) scheme = scheme->fallback();
   StepReport* report = &island->report;
   Eigen::VectorXd& backup = island->z_backup[depth];
   backup = island->z;
@@ -264,13 +265,58 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
   return true;
 }
 
-// The step of island `index` of Data (a ThreadPool task).
+// Whether body `slot` (in `state`, at the end of the step) moves against its start velocity v0 (6: v_WB, w_WB): a
+// negative kinetic-energy product m v0.v1 + w0.I_W w1.
+bool VelocityReversed(const Model& model, const State& state, int slot, const Eigen::Ref<const Eigen::VectorXd>& v0) {
+  const Body& body = model.bodies[model.moving_bodies[slot]];
+  const Mat3 R = state.X_WB(model, model.moving_bodies[slot]).linear();
+  const double product =
+      body.mass * v0.head<3>().dot(state.v_WB(slot)) + v0.tail<3>().dot(R * body.I_B * R.transpose() * state.w_WB(slot));
+  return product < 0.0;
+}
+
+// The fastest speed of a point of body `slot` within its bounding sphere, |v_WB| + |w_WB| R (m/s; |v_WB| for a body
+// without a bounded shape).
+double BodySpeed(const Model& model, const State& state, int slot) {
+  const ConvexShape& shape = model.bodies[model.moving_bodies[slot]].shape;
+  const double reach = shape.X_BS.translation().norm() + shape.BoundingRadius();
+  return state.v_WB(slot).norm() + (std::isfinite(reach) ? state.w_WB(slot).norm() * reach : 0.0);
+}
+
+// RATTLE: two reversals in a row make a body's island take the paper's step; an island that ends such a step with
+// every body slower than this share of |g| h (what gravity adds to a speed in one step) counts as at rest.
+constexpr int kReversalsToDamp = 2;
+constexpr double kRestSpeedShare = 1e-6;
+
+// The step of island `index` of Data (a ThreadPool task). With RATTLE, an island with a body whose velocity reversed
+// in each of the last two steps takes the paper's step (Data::velocity_reversals).
 void StepIsland(void* context, int index) {
   auto* task = static_cast<std::pair<const IslandStepInputs*, Data*>*>(context);
-  IslandSolve* island = task->second->islands[index].get();
+  const IslandStepInputs& in = *task->first;
+  Data* data = task->second;
+  IslandSolve* island = data->islands[index].get();
   island->report = StepReport();
   island->report.converged = true;
-  island->advanced = AdvanceIsland(*task->first, task->first->options->h, 0, island);
+  island->damping = false;
+  for (int slot : island->slots) island->damping = island->damping || data->velocity_reversals[slot] >= kReversalsToDamp;
+  island->damping = island->damping && in.options->scheme == StepperOptions::Scheme::kRattle;
+  if (island->damping) island->report.damping_steps++;
+  island->advanced = AdvanceIsland(in, in.options->h, 0, island);
+  if (!island->advanced) return;
+  // A damped island that ends at rest stays damped: the paper's step holds it there without a Newton iteration.
+  bool at_rest = island->damping;
+  const double rest_speed = kRestSpeedShare * in.model->gravity_W.norm() * in.options->h;
+  for (int slot : island->slots) at_rest = at_rest && BodySpeed(*in.model, *in.state, slot) <= rest_speed;
+  const Eigen::VectorXd& v_start = data->state_backup.v;  // the state at the step start (Step)
+  for (int slot : island->slots) {
+    int& reversals = data->velocity_reversals[slot];
+    if (at_rest) {
+      reversals = std::max(reversals, kReversalsToDamp);
+    } else {
+      const bool reversed = VelocityReversed(*in.model, *in.state, slot, v_start.segment<6>(Model::v_offset(slot)));
+      reversals = reversed ? std::min(reversals + 1, kReversalsToDamp) : 0;
+    }
+  }
 }
 
 // Solves the step's islands from `state` (at the step start) and advances *state; returns false if an island could

@@ -98,6 +98,7 @@ void ExpectSameCase(const StepCase& a, const StepCase& b) {
   for (size_t i = 0; i < wa.tangent_axes.size(); ++i) {
     EXPECT_EQ(std::memcmp(wa.tangent_axes[i].data(), wb.tangent_axes[i].data(), 3 * sizeof(double)), 0) << i;
   }
+  EXPECT_EQ(wa.velocity_reversals, wb.velocity_reversals);
   EXPECT_EQ(a.recorded.converged, b.recorded.converged);
   EXPECT_EQ(a.recorded.iterations, b.recorded.iterations);
   EXPECT_EQ(a.recorded.residual_evaluations, b.recorded.residual_evaluations);
@@ -182,6 +183,18 @@ TEST(StepCase, BadFilesNameTheFileTheLineAndWhatWasExpected) {
   EXPECT_NE(ParseError(ReplaceLine(text, options_line + 1, "h -1")).find("option h must be in (0, 1] s, got -1"),
             std::string::npos);
   EXPECT_NE(ParseError(text + "x\n").find("unexpected text after 'end'"), std::string::npos);
+  const StepCase p3 = P3Case(30).step_case;
+  const int reversals_line =
+      LineOf(text, "velocity_reversals " + std::to_string(p3.inputs.warm_start.velocity_reversals.size()));
+  EXPECT_EQ(ParseError(ReplaceLine(text, reversals_line + 1, "-1")),
+            "bad.case:" + std::to_string(reversals_line + 2) +
+                ": velocity_reversals[0] must be in [0, 1000000], got -1");
+  // A case written before the reversal counts existed reads as all 0.
+  std::string old_text = text;
+  const size_t from = old_text.find("\nvelocity_reversals ") + 1;
+  const size_t to = old_text.find("\nexternal_wrench ") + 1;
+  old_text.erase(from, to - from);
+  EXPECT_TRUE(ParseStepCase(old_text, "old.case").inputs.warm_start.velocity_reversals.empty());
   EXPECT_THROW(ReadStepCase("/nonexistent/dir/x.case"), std::runtime_error);
 }
 

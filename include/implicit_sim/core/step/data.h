@@ -53,6 +53,9 @@ struct IslandSolve {
   std::vector<char> frame_known;
   std::vector<Vec3> axes_warm_failed;
   std::vector<Eigen::VectorXd> z_backup;  // per sub-step depth
+  // RATTLE: this step takes the scheme's first-order fallback, to damp a mode the step does not resolve (see
+  // Data::velocity_reversals); set by the step before the island is solved.
+  bool damping = false;
   // --- outputs of the island's step ---
   StepReport report;
   bool advanced = false;
@@ -110,6 +113,11 @@ class Data {
   Eigen::VectorXd z_remap;
   // RATTLE: per pair of the NCP, whether z holds its closest points at the start of the step (see IslandSolve).
   std::vector<char> frame_known;
+  // RATTLE: per velocity slot, the steps in a row (up to the last) whose end velocity reversed the body's start
+  // velocity (a negative kinetic-energy product). Two in a row is a motion of period 2 h, which a second-order step
+  // does not resolve and does not damp (a flat face ringing on its contact); the island's next step then takes the
+  // paper's step, which damps it. Part of the warm start.
+  std::vector<int> velocity_reversals;
   std::vector<char> driven;  // LayOutDrives' workspace: per model joint, whether its drive is active
   // --- input: one PD drive per model joint (joints.h, JointDrive), all inactive as built; set them before Step, like
   // MuJoCo's mjData.ctrl. Step refuses invalid ones (CheckJointDrive). Turning drives on or off changes the layout of
@@ -138,6 +146,7 @@ struct WarmStart {
   Eigen::VectorXd z;
   std::vector<Vec3> tangent_axes;
   std::vector<int> driven_joints;  // model joints with a drive unknown in z (ascending)
+  std::vector<int> velocity_reversals;  // per velocity slot (Data::velocity_reversals); empty: none
 };
 void SaveWarmStart(const Data& data, WarmStart* out);
 // Throws std::invalid_argument (and changes nothing) if `saved` was not taken from a Data of this model.

@@ -42,6 +42,8 @@ struct StepReport {
   int largest_island = 0;       // moving bodies in the largest of them
   int iterations = 0;           // Newton iterations, all attempts
   int velocity_iterations = 0;  // RATTLE: those of them spent on the velocity stage (stage 2)
+  int damping_steps = 0;        // RATTLE: islands that took the paper's step to damp a motion of period 2 h
+                                // (Data::velocity_reversals)
   int residual_evaluations = 0; // evaluations of Phi by the solvers (Newton's line search included), all attempts
   double residual = 0.0;        // |Phi|_2 of the accepted solution (the largest over sub-steps)
   double complementarity_error = 0.0;
@@ -66,7 +68,7 @@ struct StepCounter {
   CounterMerge merge;
   bool run_total;    // summed over a run into the runner's summary.json
 };
-constexpr int kNumStepCounters = 19;
+constexpr int kNumStepCounters = 20;
 const std::array<StepCounter, kNumStepCounters>& StepCounterTable();
 
 // Adds an island's report to the step's: its counters by their rows, the residuals take the largest, converged only if
