@@ -14,6 +14,7 @@ uniform direction and magnitude in [0, 8] rad/s, the part's centre 0.1-0.3 m abo
 Run (after `source /tmp/implicit_sim_ws/devel/setup.bash`, from the repository root):
     /usr/bin/python3 bench/energy_drops.py                       # 100 drops x h 0.01, 0.005 x both schemes, 30-part pile
     /usr/bin/python3 bench/energy_drops.py --drops 30 --piles    # drops only
+    /usr/bin/python3 bench/energy_drops.py --piles --dump-dir DIR # and step cases of steps the guard rejected
 
 One JSON line per (case, scheme, h): case ("drops" or the pile's file name), scheme, h_s, runs, steps, wall_time_s,
 rising_steps (steps whose energy rose by more than --rise-tolerance J), rising_steps_1pct (rose by more than 1 % of
@@ -51,13 +52,17 @@ def part_shape(kind):
     return Shape.prism(6, 0.04, 0.05)
 
 
-def drop_scene(kind, mu, e_roll=0.0):
+def drop_scene_urdf(kind, mu, e_roll=0.0):
     scene = Scene(f"drop_{kind}", comment=f"a {kind} dropped on a plane, mu {mu}")
     scene.friction(mu=mu, e_t=1, e_o=1, e_r=0.01, **({"e_roll": e_roll} if e_roll > 0 else {}))
     scene.halfspace("ground")
     scene.link("part", mass=0.3, collision=part_shape(kind))
     scene.floating("part", xyz=(0, 0, 0.5))
-    return implicit_sim.load_scene_string(scene.urdf(), name=f"drop_{kind}")
+    return scene.urdf()
+
+
+def drop_scene(kind, mu, e_roll=0.0):
+    return implicit_sim.load_scene_string(drop_scene_urdf(kind, mu, e_roll), name=f"drop_{kind}")
 
 
 def random_rotation_quaternion(rng):
@@ -116,16 +121,20 @@ class Tally:
                     "guard_violations": 0, "nonconverged_steps": 0, "energy_fallbacks": 0, "paper_fallbacks": 0, "damping_steps": 0, "newton_iterations": 0,
                     "at_rest": 0}
 
-    def run(self, model, options, state, duration, tolerance):
+    def run(self, model, options, state, duration, tolerance, dump=None):
+        """dump: None, or a Dump that writes a step case of each step whose energy guard fired."""
         row = self.row
         data = implicit_sim.Data(model)
         kinetic, potential = energies(model, state)
         energy_start = energy = kinetic + potential
         started = time.perf_counter()
         steps = int(round(duration / options.h))
-        for _ in range(steps):
+        for step in range(steps):
             omega_start = largest_angular_speed(model, state)
+            before = (state.copy(), implicit_sim.save_warm_start(data)) if dump else None
             report = implicit_sim.step(model, options, state, data)
+            if dump and report.energy_fallbacks:
+                dump.write(options, before, data, report, step)
             row["steps"] += 1
             row["newton_iterations"] += report.iterations
             row["energy_fallbacks"] += report.energy_fallbacks
@@ -153,6 +162,31 @@ class Tally:
         row["at_rest"] += implicit_sim.kinetic_energy(model, state) < REST_KINETIC_ENERGY
 
 
+class Dump:
+    """Writes step cases (implicit_sim_replay) of the steps whose energy guard fired, the first of each run (scene and
+    h), up to `limit`, into `directory`."""
+
+    def __init__(self, directory, limit):
+        self.directory, self.limit, self.written = pathlib.Path(directory), limit, 0
+        self.urdf = self.scene_name = self.label = None
+        self.runs_dumped = set()
+
+    def scene(self, urdf, scene_name, label):
+        self.urdf, self.scene_name, self.label = urdf, scene_name, label
+
+    def write(self, options, before, data, report, step):
+        if self.written >= self.limit or (self.label, options.h) in self.runs_dumped:
+            return
+        self.runs_dumped.add((self.label, options.h))
+        self.directory.mkdir(parents=True, exist_ok=True)
+        name = f"{self.label}_h{options.h:g}_step{step:04d}".replace(".", "p")
+        origin = (f"bench/energy_drops.py --dump-dir: {self.label}, {options.scheme} h = {options.h:g}, step {step}, "
+                  f"energy guard fired")
+        implicit_sim.write_step_case(str(self.directory / f"{name}.case"), name, origin, self.urdf, self.scene_name,
+                                     options, before[0], before[1], data, report)
+        self.written += 1
+
+
 def make_options(scheme, h):
     options = implicit_sim.StepperOptions()
     options.scheme = scheme
@@ -171,7 +205,10 @@ def main(argv):
     parser.add_argument("--pile-duration", type=float, default=2.0)
     parser.add_argument("--e-roll", type=float, default=0.0, help="rolling resistance of the drops, m (default 0)")
     parser.add_argument("--rise-tolerance", type=float, default=1e-6, help="J (default 1e-6)")
+    parser.add_argument("--dump-dir", help="write a step case of the first step of each run whose energy guard fired")
+    parser.add_argument("--dump-max", type=int, default=50, help="at most this many cases (default 50)")
     arguments = parser.parse_args(argv)
+    dump = Dump(arguments.dump_dir, arguments.dump_max) if arguments.dump_dir else None
     models = {(kind, mu): drop_scene(kind, mu, arguments.e_roll) for kind in KINDS for mu in MUS}
     rows = []
     for h in arguments.h:
@@ -179,17 +216,22 @@ def main(argv):
             tally = Tally("drops", scheme, h)
             tally.row["e_roll_m"] = arguments.e_roll
             for i in range(arguments.drops):
-                model = models[(KINDS[i % 5], MUS[(i // 5) % 3])]
+                kind, mu = KINDS[i % 5], MUS[(i // 5) % 3]
+                model = models[(kind, mu)]
+                if dump:
+                    dump.scene(drop_scene_urdf(kind, mu, arguments.e_roll), f"drop_{kind}", f"drop{i:03d}_{kind}")
                 tally.run(model, make_options(scheme, h), drop_start(model, i, arguments.seed), arguments.duration,
-                          arguments.rise_tolerance)
+                          arguments.rise_tolerance, dump)
             rows.append(tally.row)
             print(json.dumps(tally.row), flush=True)
         for pile in arguments.piles:
             model = implicit_sim.load_scene(pile)
+            if dump:
+                dump.scene(pathlib.Path(pile).read_text(), model.name, pathlib.Path(pile).stem)
             for scheme in arguments.schemes:
                 tally = Tally(pathlib.Path(pile).name, scheme, h)
                 tally.run(model, make_options(scheme, h), implicit_sim.State.initial(model), arguments.pile_duration,
-                          arguments.rise_tolerance)
+                          arguments.rise_tolerance, dump)
                 rows.append(tally.row)
                 print(json.dumps(tally.row), flush=True)
     if {"paper", "rattle"} <= set(arguments.schemes):

@@ -13,8 +13,8 @@ The ROS messages of the node stay where they were (implicit_sim.msg, implicit_si
 from implicit_sim._core import (Data, Model, NewtonOptions, State, StepperOptions, StepReport, WarmStart,
                                 clear_warm_start, joint_position, joint_velocity, kinetic_energy, load_scene,
                                 load_scene_string, option_table, restore_warm_start, save_warm_start, step,
-                                surface_mesh, wrench_at_point)
+                                surface_mesh, wrench_at_point, write_step_case)
 
 __all__ = ["Data", "Model", "NewtonOptions", "State", "StepperOptions", "StepReport", "WarmStart", "clear_warm_start",
            "joint_position", "joint_velocity", "kinetic_energy", "load_scene", "load_scene_string", "option_table",
-           "restore_warm_start", "save_warm_start", "step", "surface_mesh", "wrench_at_point"]
+           "restore_warm_start", "save_warm_start", "step", "surface_mesh", "wrench_at_point", "write_step_case"]

@@ -2,6 +2,7 @@
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
+#include "implicit_sim/core/io/step_case.h"
 #include "implicit_sim/core/model/joints.h"
 #include "implicit_sim/core/model/wrench.h"
 #include "implicit_sim/core/step/time_stepper.h"
@@ -184,6 +185,29 @@ void BindStep(py::module_& m) {
     ClearWarmStart(&d->data);
   }, py::arg("data"),
         "the next step starts cold, like the first step of a new Data");
+  m.def("write_step_case", [](const std::string& path, const std::string& name, const std::string& origin,
+                              const std::string& urdf, const std::string& scene_name, const StepperOptions& options,
+                              const PyState& state, const WarmStart& warm_start, const PyData& data,
+                              const StepReport& report) {
+    CheckSameModel(data.model, *state.model, "State");
+    StepCase step_case;
+    step_case.name = name;
+    step_case.origin = origin;
+    step_case.scene_name = scene_name;
+    step_case.urdf = urdf;
+    step_case.broad_phase = data.data.broad_phase;
+    step_case.options = options;
+    step_case.inputs.state = state.state;
+    step_case.inputs.warm_start = warm_start;
+    step_case.recorded = RecordOutcome(report);
+    // The case must load back to a scene of the same sizes (the URDF is the one the model was loaded from).
+    LoadStepCaseModel(step_case);
+    WriteStepCase(step_case, path);
+  }, py::arg("path"), py::arg("name"), py::arg("origin"), py::arg("urdf"), py::arg("scene_name"), py::arg("options"),
+        py::arg("state"), py::arg("warm_start"), py::arg("data"), py::arg("report"),
+        "Writes a step case (bench/README.md, the step case format) for implicit_sim_replay: the step from `state` and "
+        "`warm_start` (both saved before the step), with `options`, on the scene of `urdf` loaded as `scene_name`, "
+        "that reported `report`; data gives the pair selection. Without external wrench or joint efforts.");
   m.def("step", &StepOnce, py::arg("model"), py::arg("options"), py::arg("state"), py::arg("data"),
         py::arg("wrench") = py::none(), py::arg("joint_efforts") = py::none(),
         "Advances state by one step of options.h and returns its StepReport. wrench: nv values (force N then torque "

@@ -1,7 +1,9 @@
 """The Python API against the headless runner (bit for bit), the core's checks (ValueError, nothing changed), warm
 starts, and applied wrenches and efforts against closed forms."""
 import csv
+import json
 import math
+import pathlib
 import subprocess
 
 import numpy as np
@@ -264,3 +266,38 @@ def test_the_model_reads_as_the_scene_says():
                  lambda: implicit_sim.surface_mesh(model, 0, resolution=1)):
         with pytest.raises(ValueError):
             call()
+
+
+def test_a_step_case_written_from_python_replays_as_recorded(runner, tmp_path):
+    """write_step_case: a RATTLE step of a dropped box, saved before the step, replays bit for bit in implicit_sim_replay
+    (its reversal counts included); a URDF of another scene is refused before anything is written."""
+    box = Scene("case_box")
+    box.friction(mu=0.5)
+    box.halfspace("ground")
+    box.link("box", mass=0.3, collision=Shape.box((0.1, 0.07, 0.05)))
+    box.floating("box", xyz=(0, 0, 0.06))
+    urdf = box.urdf()
+    model = implicit_sim.load_scene_string(urdf, name="case_box")
+    state, data, options = implicit_sim.State.initial(model), implicit_sim.Data(model), implicit_sim.StepperOptions()
+    for _ in range(30):
+        implicit_sim.step(model, options, state, data)
+    before, warm = state.copy(), implicit_sim.save_warm_start(data)
+    report = implicit_sim.step(model, options, state, data)
+    path = tmp_path / "box.case"
+    implicit_sim.write_step_case(str(path), "box_step30", "test_bindings.py", urdf, "case_box", options, before, warm,
+                                 data, report)
+    assert "\nvelocity_reversals 1\n" in path.read_text()
+    replay = pathlib.Path(runner).with_name("implicit_sim_replay")
+    lines = subprocess.run([str(replay), str(path)], check=True, capture_output=True, text=True).stdout.splitlines()
+    result = json.loads(lines[0])
+    assert result["same_as_recorded"] and result["iterations"] == report.iterations
+    other = Scene("other")
+    other.halfspace("ground")
+    for name in ("a", "b"):
+        other.link(name, mass=0.3, collision=Shape.box((0.1, 0.07, 0.05)))
+        other.floating(name, xyz=(0, 0, 0.06 if name == "a" else 0.3))
+    other = other.urdf()
+    with pytest.raises(ValueError, match="nq"):
+        implicit_sim.write_step_case(str(tmp_path / "bad.case"), "bad", "test", other, "other", options, before, warm,
+                                     data, report)
+    assert not (tmp_path / "bad.case").exists()

@@ -168,18 +168,16 @@ struct IslandStepInputs {
 };
 
 // The island's step by `scheme` from the start of the step (BeginStep called on its kinematics): the pose problem's
-// retry ladder (only its warm rungs if the scheme has a fallback), a cold re-solve if a body passed through another,
-// then the rest of the scheme's step, after a converged solve or after the best one of the shortest sub-step (which is
-// then accepted). Sets *crossed if the solution still crosses.
-NcpSummary SolveIslandStep(const IslandStepInputs& in, IslandScheme& scheme, bool last_chance, IslandSolve* island,
-                           bool* crossed) {
+// retry ladder up to `reach`, a cold re-solve if a body passed through another, then the rest of the scheme's step,
+// after a converged solve or after the best one of the shortest sub-step (which is then accepted). Sets *crossed if the solution still crosses.
+NcpSummary SolveIslandStep(const IslandStepInputs& in, IslandScheme& scheme, bool last_chance, LadderReach reach,
+                           IslandSolve* island, bool* crossed) {
   const Model& model = *in.model;
   const StepperOptions& options = *in.options;
   const State& state = *in.state;
   StepReport* report = &island->report;
   scheme.BeginStep(island);
   StepProblem& problem = scheme.pose_problem();
-  const LadderReach reach = scheme.fallback() ? LadderReach::kWarmRungs : LadderReach::kAllRungs;
   NcpSummary result =
       SolveWithRetryLadder(model, options, state, problem, &scheme.pose_solvers(), island, last_chance, reach, report);
   // A solution in which a body passed through another is no solution of the step (tunnelling): solve again from a
@@ -213,7 +211,6 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
   const StepperOptions& options = *in.options;
   State* state = in.state;
   IslandScheme* scheme = &island->SchemeFor(options.scheme);
-  if (island->damping && scheme->fallback() != nullptr) scheme = scheme->fallback();
   StepReport* report = &island->report;
   Eigen::VectorXd& backup = island->z_backup[depth];
   backup = island->z;
@@ -221,13 +218,30 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
   island->kinematics.BeginStep(*state, h, in.wrench);
   const bool last_chance = depth == Data::kMaxSubstepDepth;
   bool crossed = false;
-  NcpSummary result = SolveIslandStep(in, *scheme, last_chance, island, &crossed);
-  if (!result.converged && scheme->fallback() != nullptr) {
-    report->paper_fallbacks++;
+  const auto restart = [&]() {
     island->z = backup;
     island->has_warm_start = had_warm_start;
+  };
+  NcpSummary result;
+  // A damping step (see StepIsland) is the fallback's step within the warm rungs' budget: where that does not
+  // converge, the island takes the scheme's own step as if it had not been damped.
+  const bool damped = island->damping && scheme->fallback() != nullptr &&
+                      (result = SolveIslandStep(in, *scheme->fallback(), /*last_chance=*/false,
+                                                LadderReach::kWarmRungs, island, &crossed)).converged;
+  if (damped) {
+    report->damping_steps++;
     scheme = scheme->fallback();
-    result = SolveIslandStep(in, *scheme, last_chance, island, &crossed);
+  } else {
+    if (island->damping) restart();
+    island->damping = false;
+    const LadderReach reach = scheme->fallback() ? LadderReach::kWarmRungs : LadderReach::kAllRungs;
+    result = SolveIslandStep(in, *scheme, last_chance, reach, island, &crossed);
+  }
+  if (!result.converged && scheme->fallback() != nullptr) {
+    report->paper_fallbacks++;
+    restart();
+    scheme = scheme->fallback();
+    result = SolveIslandStep(in, *scheme, last_chance, LadderReach::kAllRungs, island, &crossed);
   }
   const Eigen::VectorXd& z_velocity = scheme->velocity_solution(*island);
   if (!result.converged && depth < Data::kMaxSubstepDepth) {
@@ -283,13 +297,13 @@ double BodySpeed(const Model& model, const State& state, int slot) {
   return state.v_WB(slot).norm() + (std::isfinite(reach) ? state.w_WB(slot).norm() * reach : 0.0);
 }
 
-// RATTLE: two reversals in a row make a body's island take the paper's step; an island that ends such a step with
-// every body slower than this share of |g| h (what gravity adds to a speed in one step) counts as at rest.
+// RATTLE (Data::velocity_reversals): a body alone in its island (against fixed bodies only, no joint) whose velocity
+// reversed in two steps in a row tries the paper's step. One that such a step leaves slower than kRestSpeedShare |g| h
+// (what gravity adds to a speed in a millionth of a step) is held at rest: it keeps taking the paper's step.
 constexpr int kReversalsToDamp = 2;
 constexpr double kRestSpeedShare = 1e-6;
 
-// The step of island `index` of Data (a ThreadPool task). With RATTLE, an island with a body whose velocity reversed
-// in each of the last two steps takes the paper's step (Data::velocity_reversals).
+// The step of island `index` of Data (a ThreadPool task), with the damping above.
 void StepIsland(void* context, int index) {
   auto* task = static_cast<std::pair<const IslandStepInputs*, Data*>*>(context);
   const IslandStepInputs& in = *task->first;
@@ -297,25 +311,21 @@ void StepIsland(void* context, int index) {
   IslandSolve* island = data->islands[index].get();
   island->report = StepReport();
   island->report.converged = true;
-  island->damping = false;
-  for (int slot : island->slots) island->damping = island->damping || data->velocity_reversals[slot] >= kReversalsToDamp;
-  island->damping = island->damping && in.options->scheme == StepperOptions::Scheme::kRattle;
-  if (island->damping) island->report.damping_steps++;
-  island->advanced = AdvanceIsland(in, in.options->h, 0, island);
+  // Only a lone body is damped: the ringing is a contact's (a face on its one point), and in piles a damping step
+  // changes which landing steps the ladders meet (doc/method.md).
+  const int slot = island->slots[0];
+  island->damping = island->slots.size() == 1 && island->joints.empty() &&
+                    in.options->scheme == StepperOptions::Scheme::kRattle &&
+                    data->velocity_reversals[slot] >= kReversalsToDamp;
+  island->advanced = AdvanceIsland(in, in.options->h, 0, island);  // clears `damping` if the paper's step failed
   if (!island->advanced) return;
-  // A damped island that ends at rest stays damped: the paper's step holds it there without a Newton iteration.
-  bool at_rest = island->damping;
   const double rest_speed = kRestSpeedShare * in.model->gravity_W.norm() * in.options->h;
-  for (int slot : island->slots) at_rest = at_rest && BodySpeed(*in.model, *in.state, slot) <= rest_speed;
+  const bool held = island->damping && BodySpeed(*in.model, *in.state, slot) <= rest_speed;
   const Eigen::VectorXd& v_start = data->state_backup.v;  // the state at the step start (Step)
-  for (int slot : island->slots) {
-    int& reversals = data->velocity_reversals[slot];
-    if (at_rest) {
-      reversals = std::max(reversals, kReversalsToDamp);
-    } else {
-      const bool reversed = VelocityReversed(*in.model, *in.state, slot, v_start.segment<6>(Model::v_offset(slot)));
-      reversals = reversed ? std::min(reversals + 1, kReversalsToDamp) : 0;
-    }
+  for (int s : island->slots) {
+    int& reversals = data->velocity_reversals[s];
+    const bool reversed = VelocityReversed(*in.model, *in.state, s, v_start.segment<6>(Model::v_offset(s)));
+    reversals = held || reversed ? std::min(reversals + 1, kReversalsToDamp) : 0;
   }
 }
 

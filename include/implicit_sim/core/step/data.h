@@ -53,8 +53,8 @@ struct IslandSolve {
   std::vector<char> frame_known;
   std::vector<Vec3> axes_warm_failed;
   std::vector<Eigen::VectorXd> z_backup;  // per sub-step depth
-  // RATTLE: this step takes the scheme's first-order fallback, to damp a mode the step does not resolve (see
-  // Data::velocity_reversals); set by the step before the island is solved.
+  // RATTLE: this step tries the scheme's first-order fallback within the warm rungs, to damp a mode the step does not
+  // resolve (see Data::velocity_reversals); set before the island is solved, cleared when that step fails.
   bool damping = false;
   // --- outputs of the island's step ---
   StepReport report;
@@ -113,10 +113,10 @@ class Data {
   Eigen::VectorXd z_remap;
   // RATTLE: per pair of the NCP, whether z holds its closest points at the start of the step (see IslandSolve).
   std::vector<char> frame_known;
-  // RATTLE: per velocity slot, the steps in a row (up to the last) whose end velocity reversed the body's start
-  // velocity (a negative kinetic-energy product). Two in a row is a motion of period 2 h, which a second-order step
-  // does not resolve and does not damp (a flat face ringing on its contact); the island's next step then takes the
-  // paper's step, which damps it. Part of the warm start.
+  // RATTLE: per velocity slot, the steps in a row (at most 2) whose end velocity reversed the body's start velocity (a
+  // negative kinetic-energy product). Two in a row is a motion of period 2 h, which a second-order step does not
+  // resolve and does not damp (a flat face ringing on its one contact point); a body alone in its island then tries
+  // the paper's step, which damps it, and stays on it while at rest (time_stepper.cpp). Part of the warm start.
   std::vector<int> velocity_reversals;
   std::vector<char> driven;  // LayOutDrives' workspace: per model joint, whether its drive is active
   // --- input: one PD drive per model joint (joints.h, JointDrive), all inactive as built; set them before Step, like
