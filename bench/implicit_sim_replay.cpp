@@ -95,7 +95,7 @@ std::string Json(bool value) { return value ? "true" : "false"; }
 
 struct Totals {
   int cases = 0, failures = 0, not_same = 0;
-  long iterations = 0, residual_evaluations = 0;
+  long iterations = 0, residual_evaluations = 0, factorizations = 0;
   double wall_us = 0.0;
 };
 
@@ -134,7 +134,8 @@ void ReplayOne(const std::string& path, const Arguments& arguments, Totals* tota
   std::cout << "{\"case\": " << Quoted(step_case.name) << ", \"bodies\": " << bodies
             << ", \"pairs_in_ncp\": " << report.pairs_in_ncp << ", \"converged\": " << Json(report.converged)
             << ", \"fault\": " << Quoted(StepFaultName(report.fault)) << ", \"iterations\": " << report.iterations
-            << ", \"residual_evaluations\": " << report.residual_evaluations << ", \"rung\": "
+            << ", \"residual_evaluations\": " << report.residual_evaluations
+            << ", \"factorizations\": " << report.factorizations << ", \"rung\": "
             << Quoted(HighestRung(report, step_case.inputs.warm_start.valid))
             << ", \"projected_solves\": " << report.projected_solves
             << ", \"cold_restarts\": " << report.cold_restarts << ", \"proximal_solves\": " << report.proximal_solves
@@ -150,6 +151,7 @@ void ReplayOne(const std::string& path, const Arguments& arguments, Totals* tota
   totals->not_same += !same;
   totals->iterations += report.iterations;
   totals->residual_evaluations += report.residual_evaluations;
+  totals->factorizations += report.factorizations;
   totals->wall_us += median_us;
 }
 
@@ -174,6 +176,7 @@ int main(int argc, char** argv) {
   }
   std::cout << "{\"summary\": true, \"cases\": " << totals.cases << ", \"total_iterations\": " << totals.iterations
             << ", \"total_residual_evaluations\": " << totals.residual_evaluations
+            << ", \"total_factorizations\": " << totals.factorizations
             << ", \"failures\": " << totals.failures << ", \"total_wall_us\": " << Json(totals.wall_us)
             << ", \"not_same_as_recorded\": " << totals.not_same << "}" << std::endl;
   return 0;

@@ -63,6 +63,7 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
       // The Newton direction J dz = -Phi by LU with partial pivoting. (The LM normal equations alone square J's
       // condition number, which grows as 1/h; doc/method.md, pitfall 8.)
       lu_dense_.compute(J_);
+      ++summary_->factorizations;
       // A (numerically) singular J, such as the locked axes of the planar disc give: no Newton direction. (Its LU
       // direction would be huge and exhaust the line search before the LM direction is tried.)
       if (!(lu_dense_.rcond() > 1e-13)) return false;
@@ -75,12 +76,17 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
     normal_.diagonal().array() += damping;
     rhs_.noalias() = -J_.transpose() * Phi_;
     ldlt_.compute(normal_);
+    ++summary_->factorizations;
     dz_ = ldlt_.solve(rhs_);
     return dz_.allFinite();
   }
   const Eigen::SparseMatrix<double>& J = J_sparse_.matrix;
   if (!least_squares) {
-    if (condense_ && condensed_lu_.Factorize(J, J_sparse_.pattern_version()) && CondensedDirection(J)) return true;
+    if (condense_) {
+      ++summary_->factorizations;
+      if (condensed_lu_.Factorize(J, J_sparse_.pattern_version()) && CondensedDirection(J)) return true;
+    }
+    ++summary_->factorizations;
     if (!lu_.Factorize(J, J_sparse_.pattern_version())) return false;
     dz_ = -Phi_;
     return lu_.Solve(&dz_) && dz_.allFinite();
@@ -89,6 +95,7 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
   for (int i = 0; i < normal_sparse_.rows(); ++i) normal_sparse_.coeffRef(i, i) += damping;
   rhs_ = -(J.transpose() * Phi_);
   sparse_ldlt_.compute(normal_sparse_);
+  ++summary_->factorizations;
   if (sparse_ldlt_.info() != Eigen::Success) return false;
   dz_ = sparse_ldlt_.solve(rhs_);
   return dz_.allFinite();

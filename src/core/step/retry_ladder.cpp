@@ -39,6 +39,7 @@ struct Ladder {
   void Count(const NcpSummary& summary) {
     report->iterations += summary.iterations;
     report->residual_evaluations += summary.residual_evaluations;
+    report->factorizations += summary.factorizations;
   }
 };
 

@@ -28,6 +28,7 @@ constexpr std::array<StepCounter, kNumStepCounters> kCounters{{
     {"stale_frames_kept", &R::stale_frames_kept, kSum, true},
     {"velocity_iterations", &R::velocity_iterations, kSum, false},
     {"damping_steps", &R::damping_steps, kSum, true},
+    {"factorizations", &R::factorizations, kSum, false},
 }};
 
 }  // namespace

@@ -24,6 +24,7 @@ struct NcpSummary {
   double residual = 0.0;
   int residual_evaluations = 0;  // evaluations of Phi (with or without the Jacobian)
   int lm_fallbacks = 0;          // Newton: LU directions replaced by the Levenberg-Marquardt one
+  int factorizations = 0;        // Newton: factorizations of the direction's linear system (LU, condensed LU, LDLT)
   // Ipopt: the error of the returned z (ncp_error.h); Newton leaves them NaN (its residual is |Phi|_2).
   double equation_residual = std::numeric_limits<double>::quiet_NaN();
   double complementarity = std::numeric_limits<double>::quiet_NaN();

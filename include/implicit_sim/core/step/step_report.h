@@ -45,6 +45,7 @@ struct StepReport {
   int damping_steps = 0;        // RATTLE: islands that took the paper's step to damp a motion of period 2 h
                                 // (Data::velocity_reversals)
   int residual_evaluations = 0; // evaluations of Phi by the solvers (Newton's line search included), all attempts
+  int factorizations = 0;       // Newton: factorizations of the direction's linear system, all attempts
   double residual = 0.0;        // |Phi|_2 of the accepted solution (the largest over sub-steps)
   double complementarity_error = 0.0;
   int active_contacts = 0;      // pairs with normal force > contact_threshold
@@ -68,7 +69,7 @@ struct StepCounter {
   CounterMerge merge;
   bool run_total;    // summed over a run into the runner's summary.json
 };
-constexpr int kNumStepCounters = 20;
+constexpr int kNumStepCounters = 21;
 const std::array<StepCounter, kNumStepCounters>& StepCounterTable();
 
 // Adds an island's report to the step's: its counters by their rows, the residuals take the largest, converged only if
