@@ -169,7 +169,8 @@ struct IslandStepInputs {
 
 // The island's step by `scheme` from the start of the step (BeginStep called on its kinematics): the pose problem's
 // retry ladder up to `reach`, a cold re-solve if a body passed through another, then the rest of the scheme's step,
-// after a converged solve or after the best one of the shortest sub-step (which is then accepted). Sets *crossed if the solution still crosses.
+// after a converged solve or after the best one of the shortest sub-step (which is then accepted). Sets *crossed if
+// the solution still crosses.
 NcpSummary SolveIslandStep(const IslandStepInputs& in, IslandScheme& scheme, bool last_chance, LadderReach reach,
                            IslandSolve* island, bool* crossed) {
   const Model& model = *in.model;
@@ -314,11 +315,11 @@ void StepIsland(void* context, int index) {
   // Only a lone body is damped: the ringing is a contact's (a face on its one point), and in piles a damping step
   // changes which landing steps the ladders meet (doc/method.md).
   const int slot = island->slots[0];
-  island->damping = island->slots.size() == 1 && island->joints.empty() &&
-                    in.options->scheme == StepperOptions::Scheme::kRattle &&
+  const bool rattle = in.options->scheme == StepperOptions::Scheme::kRattle;
+  island->damping = rattle && island->slots.size() == 1 && island->joints.empty() &&
                     data->velocity_reversals[slot] >= kReversalsToDamp;
   island->advanced = AdvanceIsland(in, in.options->h, 0, island);  // clears `damping` if the paper's step failed
-  if (!island->advanced) return;
+  if (!island->advanced || !rattle) return;  // the paper's step damps by itself: no counts to keep
   const double rest_speed = kRestSpeedShare * in.model->gravity_W.norm() * in.options->h;
   const bool held = island->damping && BodySpeed(*in.model, *in.state, slot) <= rest_speed;
   const Eigen::VectorXd& v_start = data->state_backup.v;  // the state at the step start (Step)
