@@ -159,7 +159,8 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const 
   summary.h = c.h;
   summary.kinetic_energy_initial = KineticEnergy(model, state);
   const long steps = std::lround(c.duration / c.h);
-  double iterations = 0.0, residual_evaluations = 0.0, factorizations = 0.0;
+  double iterations = 0.0, residual_evaluations = 0.0, factorizations = 0.0, solves = 0.0;
+  int max_factorizations = 0;
   WorstSteps worst(dump.worst);
   StepInputs inputs;  // of the current step, when dumping
   for (long i = 0; i < steps; ++i) {
@@ -172,6 +173,8 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const 
     iterations += report.iterations;
     residual_evaluations += report.residual_evaluations;
     factorizations += report.factorizations;
+    solves += report.solves;
+    max_factorizations = std::max(max_factorizations, report.factorizations);
     if (summary.wall_s > max_wall_s) break;
   }
   DumpWorstSteps(c, urdf, scene_name, data.broad_phase, options, dump, worst);
@@ -203,6 +206,9 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const 
       Field("mean_iterations", FormatNumber(summary.steps > 0 ? iterations / summary.steps : 0.0)),
       Field("mean_residual_evaluations", FormatNumber(summary.steps > 0 ? residual_evaluations / summary.steps : 0.0)),
       Field("mean_factorizations", FormatNumber(summary.steps > 0 ? factorizations / summary.steps : 0.0)),
+      Field("max_factorizations", std::to_string(max_factorizations)),
+      Field("mean_solves", FormatNumber(summary.steps > 0 ? solves / summary.steps : 0.0)),
+      Field("path_solves", std::to_string(summary.totals.path_solves)),
       Field("kinetic_energy_initial", FormatNumber(summary.kinetic_energy_initial)),
       Field("kinetic_energy_final", FormatNumber(summary.kinetic_energy_final)),
   };

@@ -121,6 +121,8 @@ void BindReport(py::module_& m) {
       .def_readonly("advanced", &StepReport::advanced)
       .def_readonly("residual", &StepReport::residual)
       .def_readonly("complementarity_error", &StepReport::complementarity_error)
+      .def_readonly("path_switch_smoothing", &StepReport::path_switch_smoothing)
+      .def_readonly("path_switch_residual", &StepReport::path_switch_residual)
       .def_readonly("joint_position_error", &StepReport::joint_position_error, "m")
       .def_readonly("joint_angle_error", &StepReport::joint_angle_error, "rad")
       .def_readonly("wall_time_s", &StepReport::wall_time_s)

@@ -145,6 +145,7 @@ std::string HighestRung(const StepReport& report, bool had_warm_start) {
   if (report.proximal_solves > 0) return "proximal";
   if (report.cold_restarts > 0 || !had_warm_start) return "cold";
   if (report.projected_solves > 0) return "projected";
+  if (report.path_solves > 0) return "path";
   return "warm";
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace implicit_sim {
 
@@ -41,6 +42,7 @@ bool SemismoothNewton::CondensedDirection(const Eigen::SparseMatrix<double>& J) 
   // residual, refined once, and left to the LU of the whole matrix if still inaccurate.
   constexpr double kRelativeLinearResidual = 1e-8;
   dz_ = -Phi_;
+  ++summary_->solves;
   if (!condensed_lu_.Solve(&dz_)) return false;
   const double bound = kRelativeLinearResidual * Phi_.norm();
   for (int refinement = 0;; ++refinement) {
@@ -51,6 +53,7 @@ bool SemismoothNewton::CondensedDirection(const Eigen::SparseMatrix<double>& J) 
     if (residual <= bound) return true;
     if (refinement == 1) return false;
     rhs_ = -rhs_;
+    ++summary_->solves;
     if (!condensed_lu_.Solve(&rhs_)) return false;
     dz_ += rhs_;
   }
@@ -67,6 +70,7 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
       // A (numerically) singular J, such as the locked axes of the planar disc give: no Newton direction. (Its LU
       // direction would be huge and exhaust the line search before the LM direction is tried.)
       if (!(lu_dense_.rcond() > 1e-13)) return false;
+      ++summary_->solves;
       dz_.noalias() = lu_dense_.solve(-Phi_);
       return dz_.allFinite();
     }
@@ -77,6 +81,7 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
     rhs_.noalias() = -J_.transpose() * Phi_;
     ldlt_.compute(normal_);
     ++summary_->factorizations;
+    ++summary_->solves;
     dz_ = ldlt_.solve(rhs_);
     return dz_.allFinite();
   }
@@ -88,6 +93,7 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
     }
     ++summary_->factorizations;
     if (!lu_.Factorize(J, J_sparse_.pattern_version())) return false;
+    ++summary_->solves;
     dz_ = -Phi_;
     return lu_.Solve(&dz_) && dz_.allFinite();
   }
@@ -97,6 +103,7 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
   sparse_ldlt_.compute(normal_sparse_);
   ++summary_->factorizations;
   if (sparse_ldlt_.info() != Eigen::Success) return false;
+  ++summary_->solves;
   dz_ = sparse_ldlt_.solve(rhs_);
   return dz_.allFinite();
 }
@@ -128,15 +135,15 @@ void SemismoothNewton::RememberMerit(double merit) {
   history_count_ = std::min(history_count_ + 1, kMaxMemory);
 }
 
-NcpSummary SemismoothNewton::Solve(const NcpProblem& problem, const NewtonOptions& options, Eigen::VectorXd* z,
-                                   double smoothing) {
-  NcpSummary summary;
-  summary_ = &summary;
+void SemismoothNewton::BeginSolve(const NcpProblem& problem, const NewtonOptions& options, double smoothing,
+                                  NcpSummary* summary) {
+  summary_ = summary;
   mode_ = NcpEvalMode();
   mode_.smoothing = smoothing;
   mode_.project_multipliers = options.project_multipliers;
   mode_.proximal_weight = options.proximal_center ? options.proximal_weight : 0.0;
   mode_.proximal_center = options.proximal_center;
+  mode_.regularization = options.sparse_regularization;
   Resize(problem.size());
   if (sparse_) lu_.ForgetPivots();  // a solve depends on its inputs only
   condense_ = false;
@@ -146,15 +153,44 @@ NcpSummary SemismoothNewton::Solve(const NcpProblem& problem, const NewtonOption
     condensed_lu_.ForgetPivots();
     condense_ = condensed_lu_.has_blocks();
   }
+  history_count_ = history_next_ = 0;
+  if (options.trace) ++options.trace->solves;
+}
+
+bool SemismoothNewton::Step(const NcpProblem& problem, const NewtonOptions& options, double merit, int iteration,
+                            Eigen::VectorXd* z) {
+  RememberMerit(merit);
+  // The LU direction first; where J is singular, the Levenberg-Marquardt one, a descent direction whenever
+  // J^T Phi != 0. In dense mode also where the LU direction does not decrease the merit; in sparse mode that is
+  // left to the retry ladder, because J^T J fills in (the 1000-gon's body couples to all its 1000 multipliers).
+  const bool lu_ok = Direction(options, merit, false);
+  double step = lu_ok ? LineSearch(problem, options, *z, merit) : 0.0;
+  const bool least_squares = step == 0.0 && (!lu_ok || !sparse_);
+  if (least_squares) {
+    ++lm_fallbacks_;
+    ++summary_->lm_fallbacks;
+    if (Direction(options, merit, true)) step = LineSearch(problem, options, *z, merit);
+  }
+  if (options.trace) {
+    options.trace->rows.push_back(
+        {options.trace->solves - 1, iteration, mode_.smoothing, std::sqrt(2.0 * merit), step, least_squares});
+  }
+  if (step == 0.0) return false;  // no decrease: stalled (Phi_ still belongs to *z)
+  z->swap(z_trial_);
+  return true;
+}
+
+NcpSummary SemismoothNewton::Solve(const NcpProblem& problem, const NewtonOptions& options, Eigen::VectorXd* z,
+                                   double smoothing) {
+  NcpSummary summary;
+  BeginSolve(problem, options, smoothing, &summary);
   // delta enters the Jacobian only, never Phi; the first one from the residual at the start.
-  mode_.regularization = options.sparse_regularization;
   if (options.residual_regularization > 0.0) {
     Evaluate(problem, *z, false);
     mode_.regularization += options.residual_regularization * Phi_.norm();
   }
   Evaluate(problem, *z, true);
   double merit = 0.5 * Phi_.squaredNorm();
-  history_count_ = history_next_ = 0;
   // Relative part: rows such as a1 - a2 - d n carry coordinates, whose rounding error grows with their size.
   const auto tolerance = [&]() { return options.tolerance * (1.0 + z->lpNorm<Eigen::Infinity>()); };
   summary.termination = NcpTermination::kMaxIterations;
@@ -165,22 +201,10 @@ NcpSummary SemismoothNewton::Solve(const NcpProblem& problem, const NewtonOption
       break;
     }
     if (summary.residual <= tolerance()) break;
-    RememberMerit(merit);
-    // The LU direction first; where J is singular, the Levenberg-Marquardt one, a descent direction whenever
-    // J^T Phi != 0. In dense mode also where the LU direction does not decrease the merit; in sparse mode that is
-    // left to the retry ladder, because J^T J fills in (the 1000-gon's body couples to all its 1000 multipliers).
-    const bool lu_ok = Direction(options, merit, false);
-    bool accepted = lu_ok && LineSearch(problem, options, *z, merit) > 0.0;
-    if (!accepted && (!lu_ok || !sparse_)) {
-      ++lm_fallbacks_;
-      ++summary.lm_fallbacks;
-      accepted = Direction(options, merit, true) && LineSearch(problem, options, *z, merit) > 0.0;
-    }
-    if (!accepted) {  // no decrease: stalled (Phi_ still belongs to *z)
+    if (!Step(problem, options, merit, summary.iterations, z)) {
       summary.termination = NcpTermination::kNoDescent;
       break;
     }
-    z->swap(z_trial_);
     // The new Jacobian's delta from the last residual (Phi and J come from one evaluation).
     mode_.regularization = options.sparse_regularization + options.residual_regularization * std::sqrt(2.0 * merit);
     Evaluate(problem, *z, true);
@@ -191,6 +215,65 @@ NcpSummary SemismoothNewton::Solve(const NcpProblem& problem, const NewtonOption
   if (summary.converged) summary.termination = NcpTermination::kConverged;
   summary_ = nullptr;
   return summary;
+}
+
+NcpSummary SemismoothNewton::FollowSmoothingPath(const NcpProblem& problem, const NewtonOptions& options,
+                                                 const PathOptions& path, Eigen::VectorXd* z) {
+  NcpSummary summary;
+  BeginSolve(problem, options, 0.0, &summary);
+  Evaluate(problem, *z, false);
+  double exact_residual = Phi_.lpNorm<Eigen::Infinity>();
+  double mu = std::min(path.initial_smoothing, exact_residual);
+  double reached = std::numeric_limits<double>::quiet_NaN();  // the last level whose neighbourhood was reached
+  int level_steps = 0;
+  bool raised = false;
+  while (std::isfinite(exact_residual) && mu > path.final_smoothing && exact_residual > path.switch_residual) {
+    mode_.smoothing = mu;
+    Evaluate(problem, *z, true);
+    const double level_residual = Phi_.lpNorm<Eigen::Infinity>();
+    if (!std::isfinite(level_residual)) break;
+    if (level_residual <= path.neighbourhood * mu) {  // in the level's neighbourhood: the next, smaller mu
+      mode_.smoothing = 0.0;
+      Evaluate(problem, *z, false);
+      exact_residual = Phi_.lpNorm<Eigen::Infinity>();
+      reached = mu;
+      // Superlinear where the residual allows it, but at most 10x a level: a larger cut leaves the iterate outside
+      // the next level's neighbourhood, where Newton on the smoothed rows stalls as it does on the exact ones.
+      mu = std::max(path.max_reduction * mu, std::min(0.2 * mu, std::pow(level_residual, 1.5)));
+      level_steps = 0;
+      raised = false;
+      history_count_ = history_next_ = 0;  // the merits of another level do not compare
+      continue;
+    }
+    if (summary.path_iterations == path.max_iterations) break;
+    if (level_steps == path.steps_per_level) {  // the level is too tight for this iterate: widen it once
+      if (raised) break;                         // or, widened, still not reached: leave the path
+      mu *= 2.0;
+      raised = true;
+      level_steps = 0;
+      history_count_ = history_next_ = 0;
+      continue;
+    }
+    if (!Step(problem, options, 0.5 * Phi_.squaredNorm(), summary.path_iterations, z)) break;
+    ++summary.path_iterations;
+    ++level_steps;
+  }
+  summary.switch_smoothing = reached;
+  mode_.smoothing = 0.0;
+  Evaluate(problem, *z, false);
+  summary.switch_residual = Phi_.lpNorm<Eigen::Infinity>();
+  NewtonOptions polish = options;
+  polish.max_iterations = path.polish_iterations;
+  NcpSummary exact = Solve(problem, polish, z);
+  exact.iterations += summary.path_iterations;
+  exact.path_iterations = summary.path_iterations;
+  exact.residual_evaluations += summary.residual_evaluations;
+  exact.factorizations += summary.factorizations;
+  exact.solves += summary.solves;
+  exact.lm_fallbacks += summary.lm_fallbacks;
+  exact.switch_smoothing = summary.switch_smoothing;
+  exact.switch_residual = summary.switch_residual;
+  return exact;
 }
 
 }  // namespace implicit_sim

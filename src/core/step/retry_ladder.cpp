@@ -40,6 +40,7 @@ struct Ladder {
     report->iterations += summary.iterations;
     report->residual_evaluations += summary.residual_evaluations;
     report->factorizations += summary.factorizations;
+    report->solves += summary.solves;
   }
 };
 
@@ -91,6 +92,27 @@ bool ProjectedRetry(const StepperOptions& projected_options, Ladder* ladder, Ncp
     ladder->work.z_best = ladder->z;
   }
   return projected.converged;
+}
+
+// Rung 1p: the smoothing path (SemismoothNewton::FollowSmoothingPath) from work.z_start, polished on the exact
+// problem. Keeps the better of it and *first (with its iterate in work.z_best); true if it converged.
+bool SmoothingPath(const StepperOptions& options, Ladder* ladder, NcpSummary* first) {
+  ladder->report->path_solves++;
+  ladder->z = ladder->work.z_start;
+  const NcpSummary path = ladder->solver.FollowSmoothingPath(ladder->problem, options.newton, PathOptions(), &ladder->z);
+  ladder->Count(path);
+  ladder->report->path_iterations += path.path_iterations;
+  if (std::isfinite(path.switch_smoothing)) {
+    ladder->report->path_switch_smoothing = std::max(ladder->report->path_switch_smoothing, path.switch_smoothing);
+  }
+  if (std::isfinite(path.switch_residual)) {
+    ladder->report->path_switch_residual = std::max(ladder->report->path_switch_residual, path.switch_residual);
+  }
+  if (path.residual < first->residual || !std::isfinite(first->residual) || path.converged) {
+    *first = path;
+    ladder->work.z_best = ladder->z;
+  }
+  return path.converged;
 }
 
 // Rung 2b: proximal point. Newton on the problem perturbed by the weight c (z - z_k) on the contact force and friction
@@ -157,6 +179,16 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
   if (problem.HasFallbackFrames()) {
     warm_options.newton.max_iterations = std::min(options.newton.max_iterations, kStartFrameIterations);
   }
+  // A sparse island of several pairs (a pile's) gets a short plain warm attempt before the projected one (and rung
+  // 1p), except in a budgeted ladder: where a landing's plain warm start converges at all it takes few iterations,
+  // and the projected start converges from where it stalls (bench/README.md, the corpus). One pair of many
+  // inequalities (the 1000-gon) keeps the full plain attempt: projection fails it (doc/method.md).
+  const bool sparse_warm = !warm_rungs_only && !problem.HasFallbackFrames() &&
+                           options.solver == StepperOptions::Solver::kNewton &&
+                           problem.size() > NewtonSolvers::kDenseSizeLimit && island->layout.blocks().size() > 1;
+  if (sparse_warm) {
+    warm_options.newton.max_iterations = std::min(options.newton.max_iterations, options.sparse_warm_iterations);
+  }
   NcpSummary warm = SolveFromStart(warm_options, &ladder);
   if (!warm.converged && warm.residual <= kNearRootResidual &&
       warm_options.newton.max_iterations < budget.newton.max_iterations) {
@@ -192,6 +224,7 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
   // Every rung from here on projects the multipliers (with projected_retries): they start where the plain rows failed.
   StepperOptions later_options = options;
   later_options.newton.project_multipliers = options.projected_retries;
+  if (sparse_warm && options.path_following && SmoothingPath(later_options, &ladder, &warm)) return warm;
   if (options.solver == StepperOptions::Solver::kNewton && options.projected_retries &&
       ProjectedRetry(later_options, &ladder, &warm)) {
     return warm;

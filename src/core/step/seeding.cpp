@@ -113,6 +113,23 @@ void PredictClosestPoints(const StepLayout& layout, const StepKinematics& kinema
   }
 }
 
+
+// A pair that carried no load in the last solution (ln = 0) and did not slip (sigma = 0) carries no information
+// about its friction: its fractions are whatever the last solve left, and at sigma = 0 the slip rows
+// e (t . v_rel) + s sigma do not determine them. Where the predicted gap closes (d <= 0 after PredictClosestPoints),
+// Newton's first direction would move those fractions by rate / delta (delta = 1e-9, the proximal diagonal): 1e8 in a
+// landing pile, a step length of 1e-9, a failed warm start. Such a pair starts from the cold start's friction seeds
+// (SeedFriction); a pair predicted apart keeps its fractions, which its separated rows determine.
+void ReseedUnloadedFriction(const StepLayout& layout, const StepKinematics& kinematics, Eigen::VectorXd* z) {
+  const double no_load = 1e-9 * kinematics.force_scale();  // N
+  constexpr double kNoSlip = 1e-9;                          // m/s
+  for (int c = 0; c < static_cast<int>(layout.blocks().size()); ++c) {
+    const PairBlock& blk = layout.blocks()[c];
+    const bool unloaded = (*z)[blk.normal_force()] <= no_load && (*z)[blk.sigma()] <= kNoSlip;
+    if (unloaded && (*z)[blk.offset + pair_index::kD] <= 0.0) SeedFriction(layout, kinematics, c, z);
+  }
+}
+
 }  // namespace
 
 void SeedColdStart(const Model& model, const State& state, const StepProblem& problem, StepLayout* layout,
@@ -132,6 +149,7 @@ void SeedWarmStart(const Model&, const State& state, const StepProblem& problem,
   problem.SeedVelocities(state, z);  // the previous solution's velocities are the state's
   layout->UpdateTangentAxes(z);
   PredictClosestPoints(*layout, problem.kinematics(), z);
+  ReseedUnloadedFriction(*layout, problem.kinematics(), z);
 }
 
 }  // namespace implicit_sim

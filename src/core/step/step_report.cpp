@@ -28,7 +28,10 @@ constexpr std::array<StepCounter, kNumStepCounters> kCounters{{
     {"stale_frames_kept", &R::stale_frames_kept, kSum, true},
     {"velocity_iterations", &R::velocity_iterations, kSum, false},
     {"damping_steps", &R::damping_steps, kSum, true},
-    {"factorizations", &R::factorizations, kSum, false},
+    {"factorizations", &R::factorizations, kSum, true},
+    {"solves", &R::solves, kSum, true},
+    {"path_solves", &R::path_solves, kSum, true},
+    {"path_iterations", &R::path_iterations, kSum, true},
 }};
 
 }  // namespace
@@ -42,6 +45,8 @@ void MergeIslandReport(const StepReport& island, StepReport* step) {
   }
   step->residual = std::max(step->residual, island.residual);
   step->complementarity_error = std::max(step->complementarity_error, island.complementarity_error);
+  step->path_switch_smoothing = std::max(step->path_switch_smoothing, island.path_switch_smoothing);
+  step->path_switch_residual = std::max(step->path_switch_residual, island.path_switch_residual);
   if (step->fault == StepFault::kNone && island.fault != StepFault::kNone) {
     step->fault = island.fault;
     step->fault_detail = island.fault_detail;

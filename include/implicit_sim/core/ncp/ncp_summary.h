@@ -25,6 +25,12 @@ struct NcpSummary {
   int residual_evaluations = 0;  // evaluations of Phi (with or without the Jacobian)
   int lm_fallbacks = 0;          // Newton: LU directions replaced by the Levenberg-Marquardt one
   int factorizations = 0;        // Newton: factorizations of the direction's linear system (LU, condensed LU, LDLT)
+  int solves = 0;                // Newton: solves with a factorization (refinements of a condensed direction included)
+  // The smoothing path (SemismoothNewton::FollowSmoothingPath): its Newton iterations (also counted in iterations),
+  // and at its switch to the exact problem the smoothing mu and the exact residual max_i |Phi_i|; NaN: no path.
+  int path_iterations = 0;
+  double switch_smoothing = std::numeric_limits<double>::quiet_NaN();
+  double switch_residual = std::numeric_limits<double>::quiet_NaN();
   // Ipopt: the error of the returned z (ncp_error.h); Newton leaves them NaN (its residual is |Phi|_2).
   double equation_residual = std::numeric_limits<double>::quiet_NaN();
   double complementarity = std::numeric_limits<double>::quiet_NaN();

@@ -13,6 +13,7 @@
 
 #include <array>
 #include <string>
+#include <vector>
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -25,6 +26,21 @@
 #include "implicit_sim/core/ncp/sparse_lu.h"
 
 namespace implicit_sim {
+
+// A per-iteration trace of Newton solves (NewtonOptions::trace): one row per iteration, for diagnosis only (it
+// allocates as it grows, and one trace serves one thread).
+struct NewtonTraceRow {
+  int solve = 0;             // which solve of the trace (0, 1, ...)
+  int iteration = 0;         // within that solve
+  double smoothing = 0.0;    // the smoothing mu of its rows (0: the exact problem)
+  double residual = 0.0;     // |Phi_mu|_2 at the iterate, before the step
+  double step = 0.0;         // the line search's step length (0: no step was accepted)
+  bool least_squares = false;  // the step followed the Levenberg-Marquardt direction
+};
+struct NewtonTrace {
+  std::vector<NewtonTraceRow> rows;
+  int solves = 0;
+};
 
 struct NewtonOptions {
   double tolerance = 1e-12;       // converged when |Phi|_2 <= tolerance (1 + |z|_inf) (rows are scaled to O(1))
@@ -46,7 +62,25 @@ struct NewtonOptions {
   // Sparse solves condense the problem's local blocks (NcpProblem::CondensableBlocks) out of the Newton matrix by a
   // Schur complement before KLU (condensed_lu.h); the whole matrix is factorized when a block is singular.
   bool condense_blocks = true;
+  // When set, every iteration appends a row (not an option of the table: the replay tool's --trace).
+  NewtonTrace* trace = nullptr;
   // The allowed ranges are those of the step's options table (step/options.h), which validates these fields.
+};
+
+// The smoothing path (SemismoothNewton::FollowSmoothingPath): Newton on the Fischer-Burmeister functions smoothed by
+// mu, leaving each level as soon as the iterate is in its neighbourhood max_i |Phi_mu,i| <= neighbourhood * mu, with
+// the next mu driven by the residual (Qi, Sun and Zhou 2000), then Newton on the exact problem.
+struct PathOptions {
+  double initial_smoothing = 1.0;   // mu_0 = min(this, max_i |Phi_0,i(z_0)|)
+  double final_smoothing = 1e-9;    // the path ends below this mu, or where max_i |Phi_0,i| <= switch_residual
+  double switch_residual = 1e-6;
+  double neighbourhood = 1.0;       // beta
+  double max_reduction = 0.1;       // the next level's mu is at least this share of the last one
+  // Newton steps at one mu before it is doubled (once per level); as many again at the doubled mu, and the path ends
+  // there (polished from where it got).
+  int steps_per_level = 3;
+  int max_iterations = 40;          // Newton steps on the path
+  int polish_iterations = 6;        // Newton steps on the exact problem after it
 };
 
 class SemismoothNewton {
@@ -58,10 +92,19 @@ class SemismoothNewton {
   // problem.size() (it is resized, which allocates, only when that changes).
   NcpSummary Solve(const NcpProblem& problem, const NewtonOptions& options, Eigen::VectorXd* z,
                    double smoothing = 0.0);
+  // Follows the smoothing path from *z (PathOptions), then polishes on the exact problem; the summary counts both
+  // (path_iterations, switch_smoothing and switch_residual describe the path).
+  NcpSummary FollowSmoothingPath(const NcpProblem& problem, const NewtonOptions& options, const PathOptions& path,
+                                 Eigen::VectorXd* z);
   int lm_fallbacks() const { return lm_fallbacks_; }  // over all solves (NcpSummary::lm_fallbacks: one solve)
 
  private:
   void Resize(int n);
+  // Sets the evaluation mode, the workspace and the factorizations' state for a solve into *summary.
+  void BeginSolve(const NcpProblem& problem, const NewtonOptions& options, double smoothing, NcpSummary* summary);
+  // One Newton step from *z (Phi_ and the Jacobian evaluated there): the direction, the line search, z moved. False
+  // if no step decreased the merit. Traces it with `iteration`.
+  bool Step(const NcpProblem& problem, const NewtonOptions& options, double merit, int iteration, Eigen::VectorXd* z);
   void Evaluate(const NcpProblem& problem, const Eigen::VectorXd& z, bool jacobian);
   void RememberMerit(double merit);  // into the line search's memory
   // dz_ from Phi_ and the Jacobian: the LU Newton direction, or with least_squares the Levenberg-Marquardt one.

@@ -28,6 +28,11 @@ struct StepperOptions {
   // The proximal-point rung (retry_ladder.h) starts with this weight (m/s per unit multiplier) and divides it by 10
   // each round; 0: no proximal rung. [0, 1000]
   double proximal_weight = 1.0;
+  // Newton iterations of the plain warm start of a sparse island of several pairs (retry_ladder.h, rung 1) before the
+  // projected one, [1, 1000] (more where its residual is already below 1e-6).
+  int sparse_warm_iterations = 8;
+  // The smoothing-path rung (retry_ladder.h, rung 1p) after it, 0 or 1 (an ablation: measured, not kept).
+  bool path_following = false;
   // Block Gauss-Seidel sweeps (block_predictor.h) over the pair blocks with the largest residuals, before the warm
   // solve, when its start's |Phi| exceeds predictor_residual; 0: none. [0, 20], (0, inf)
   int predictor_sweeps = 0;
@@ -75,7 +80,7 @@ struct OptionRow {
   void (*set)(StepperOptions* options, double value);
 };
 
-constexpr int kNumOptionRows = 23;
+constexpr int kNumOptionRows = 25;
 const std::array<OptionRow, kNumOptionRows>& OptionTable();
 
 // The row with this field, ROS parameter or runner flag; nullptr when none (an empty name finds nothing).

@@ -1,5 +1,10 @@
 // The retry ladder of one step solve: what the stepper tries, in order, until the step NCP is solved.
-//   1. warm start: the previous step's solution carried over the step (seeding.h), by the primary solver;
+//   1. warm start: the previous step's solution carried over the step (seeding.h), by the primary solver; on a sparse
+//      island of several pairs (more than NewtonSolvers::kDenseSizeLimit unknowns: a pile) within StepperOptions::sparse_warm_iterations
+//      Newton iterations (more only where its residual is already below 1e-6);
+//   1p. with StepperOptions::path_following (off by default), on such an island, the smoothing path from the same
+//      start (SemismoothNewton::FollowSmoothingPath: each smoothing level left after the 1-3 Newton steps that reach
+//      its neighbourhood, then at most 6 exact ones);
 //   1a. the same start on the problem's fallback formulation, if it has one (StepProblem::UseFallbackFrames: RATTLE's
 //       stage 1 with every pair on its end-of-step frame instead of its start frame; StepReport::end_frame_retries);
 //   1b. the same start by Newton with projected multipliers (ncp_problem.h; with StepperOptions::projected_retries,

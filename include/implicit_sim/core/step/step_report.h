@@ -46,6 +46,13 @@ struct StepReport {
                                 // (Data::velocity_reversals)
   int residual_evaluations = 0; // evaluations of Phi by the solvers (Newton's line search included), all attempts
   int factorizations = 0;       // Newton: factorizations of the direction's linear system, all attempts
+  int solves = 0;               // Newton: solves with those factorizations (a condensed direction's refinement too)
+  int path_solves = 0;          // solves that followed the smoothing path (retry_ladder.h, rung 1p)
+  int path_iterations = 0;      // Newton iterations on the smoothing path (also in iterations)
+  // At the smoothing path's switch to the exact problem: the last smoothing mu whose neighbourhood it reached and the
+  // exact residual max_i |Phi_i| (the largest over the step's path solves; 0 without one).
+  double path_switch_smoothing = 0.0;
+  double path_switch_residual = 0.0;
   double residual = 0.0;        // |Phi|_2 of the accepted solution (the largest over sub-steps)
   double complementarity_error = 0.0;
   int active_contacts = 0;      // pairs with normal force > contact_threshold
@@ -69,7 +76,7 @@ struct StepCounter {
   CounterMerge merge;
   bool run_total;    // summed over a run into the runner's summary.json
 };
-constexpr int kNumStepCounters = 21;
+constexpr int kNumStepCounters = 24;
 const std::array<StepCounter, kNumStepCounters>& StepCounterTable();
 
 // Adds an island's report to the step's: its counters by their rows, the residuals take the largest, converged only if
