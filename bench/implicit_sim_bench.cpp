@@ -4,10 +4,14 @@
 //   implicit_sim_bench --scenario S1 --shape ellipsoid --n 100 --duration 2 [--dt 0.005] [--seed 42]
 //   implicit_sim_bench --scenario P3 [--duration 5] [--dt 0.01] [--scenes-dir DIR]
 //   implicit_sim_bench --scenario P1 --variant p1_ngon100         a P case by its variant (AllCases below)
-// --max-wall S (default 300 s of solver time per run) stops a run early; its line then says "completed": false.
+// --max-wall S (default 300 s of solver time per run) stops a run early, within a step (the step is then undone); its
+// line then says "completed": false and "stop_reason": "max_wall". SIGINT and SIGTERM stop the current run the same
+// way ("stop_reason": "interrupted"), print its line and exit 130 without running the remaining cases.
 // --dump-worst K --dump-dir DIR writes the K hardest steps of each run as step cases (io/step_case.h) for
 // implicit_sim_replay: DIR/<scenario>_<variant>_step<NNNN>.case, NNNN the number of steps before it.
 #include <algorithm>
+#include <chrono>
+#include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -20,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "implicit_sim/core/base/interrupt.h"
 #include "implicit_sim/core/io/pile_scene.h"
 #include "implicit_sim/core/io/run_output.h"
 #include "implicit_sim/core/io/step_case.h"
@@ -139,6 +144,14 @@ void DumpWorstSteps(const Case& c, const std::string& urdf, const std::string& s
   }
 }
 
+// Set by SIGINT and SIGTERM (a second signal kills as usual); the --max-wall deadline of the current step.
+implicit_sim::StepInterrupt g_interrupt;
+
+extern "C" void OnStopSignal(int signal_number) {
+  g_interrupt.Request();
+  std::signal(signal_number, SIG_DFL);
+}
+
 // Runs one case and prints its JSON line.
 void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const DumpRequest& dump,
          const std::vector<std::pair<const OptionRow*, double>>& overrides) {
@@ -163,11 +176,24 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const 
   int max_factorizations = 0;
   WorstSteps worst(dump.worst);
   StepInputs inputs;  // of the current step, when dumping
+  std::string stop_reason = "duration";
+  data.interrupt = &g_interrupt;
   for (long i = 0; i < steps; ++i) {
     if (dump.worst > 0) CaptureStepInputs(state, data, nullptr, &inputs);
+    // The solver time left (max_wall_s less the steps so far) is the deadline of this step.
+    g_interrupt.SetDeadline(StepInterrupt::Clock::now() +
+                            std::chrono::duration_cast<StepInterrupt::Clock::duration>(
+                                std::chrono::duration<double>(std::max(0.0, max_wall_s - summary.wall_s))));
     const StepReport report = Step(model, options, &state, &data);
+    if (report.fault == StepFault::kInterrupted) {
+      stop_reason = g_interrupt.requested() ? "interrupted" : "max_wall";
+      break;
+    }
     worst.Offer(i, report, inputs);
-    if (!report.advanced) break;
+    if (!report.advanced) {
+      stop_reason = "refused";
+      break;
+    }
     summary.Add(report, data);
     if (metrics.NeedsSamples()) metrics.Observe(SampleOf(model, state, data));
     iterations += report.iterations;
@@ -175,8 +201,12 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const 
     factorizations += report.factorizations;
     solves += report.solves;
     max_factorizations = std::max(max_factorizations, report.factorizations);
-    if (summary.wall_s > max_wall_s) break;
+    if (summary.wall_s > max_wall_s) {
+      stop_reason = i + 1 < steps ? "max_wall" : stop_reason;
+      break;
+    }
   }
+  g_interrupt.ClearDeadline();
   DumpWorstSteps(c, urdf, scene_name, data.broad_phase, options, dump, worst);
   summary.kinetic_energy_final = KineticEnergy(model, state);
   const double us = summary.steps > 0 ? 1e6 * summary.wall_s / summary.steps : 0.0;
@@ -188,6 +218,7 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const 
       Field("scheme", Quoted(OptionChoiceName(*FindOptionByField("scheme"), options))),
       Field("steps", std::to_string(summary.steps)),
       Field("completed", summary.steps == steps ? "true" : "false"),
+      Field("stop_reason", Quoted(stop_reason)),
       Field("simulated_s", FormatNumber(summary.steps * c.h)),
       Field("wall_s", FormatNumber(summary.wall_s)),
       Field("us_per_step", FormatNumber(us)),
@@ -364,8 +395,13 @@ int main(int argc, char** argv) {
     std::cerr << "implicit_sim_bench: " << e.what() << "\n" << usage << "\n";
     return 2;
   }
+  std::signal(SIGINT, OnStopSignal);
+  std::signal(SIGTERM, OnStopSignal);
   try {
-    for (const Case& c : cases) Run(c, scenes_dir, max_wall_s, dump, overrides);
+    for (const Case& c : cases) {
+      Run(c, scenes_dir, max_wall_s, dump, overrides);
+      if (g_interrupt.requested()) return 130;
+    }
   } catch (const std::exception& e) {
     std::cerr << "implicit_sim_bench: " << e.what() << "\n";
     return 1;

@@ -2,9 +2,13 @@
 // Writes DIR/trajectory.csv and DIR/summary.json (see doc/runner.md). No roscore needed. With --stop-at-rest E:S the run
 // ends early once the kinetic energy has stayed below E (J) for S (s) of simulated time. With --check-penetration
 // every step end is checked for overlaps from the geometry alone (MaxPenetrationBound), not from the step's gaps.
+// --max-wall S, SIGINT and SIGTERM stop the run within a step (its solvers stop between factorizations and the step is
+// undone); what was written up to the last finished step stays, summary.json included.
 #include <algorithm>
 #include <charconv>
+#include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -12,6 +16,7 @@
 #include <memory>
 #include <string>
 
+#include "implicit_sim/core/base/interrupt.h"
 #include "implicit_sim/core/io/run_output.h"
 #include "implicit_sim/core/model/state.h"
 #include "implicit_sim/core/step/step_health.h"
@@ -23,7 +28,7 @@ namespace {
 constexpr const char* kUsage =
     "usage: implicit_sim_run --scene FILE --duration T --dt H --out DIR [--scheme paper|rattle] [--tolerance TOL] "
     "[--max-iterations N] "
-    "[--solver newton|ipopt] [--threads N] [--stop-at-rest E:S] [--check-penetration]";
+    "[--solver newton|ipopt] [--threads N] [--stop-at-rest E:S] [--check-penetration] [--max-wall S]";
 
 struct Args {
   std::string scene, out;
@@ -33,7 +38,17 @@ struct Args {
   double rest_energy = 0.0;  // J: "at rest" means kinetic energy < rest_energy
   double rest_hold = 0.0;    // s: ... at every step over this much simulated time
   bool check_penetration = false;  // summary.json's max_penetration_oracle: a geometric check of every step end
+  double max_wall = 0.0;           // s of wall time for the stepping; 0: no limit
 };
+
+// Set by SIGINT and SIGTERM (a second signal kills the process as usual) and by the --max-wall deadline; every step
+// watches it (Data::interrupt).
+implicit_sim::StepInterrupt g_interrupt;
+
+extern "C" void OnStopSignal(int signal_number) {
+  g_interrupt.Request();
+  std::signal(signal_number, SIG_DFL);
+}
 
 // Pairs closer than this (m) are measured by the separating-plane bound rather than called separated.
 constexpr double kPenetrationCheckTolerance = 1e-9;
@@ -92,7 +107,7 @@ Args ParseArgs(int argc, char** argv) {
       values[flag] = "";
       continue;
     }
-    if (flag != "--scene" && flag != "--duration" && flag != "--out" && flag != "--stop-at-rest" &&
+    if (flag != "--scene" && flag != "--duration" && flag != "--out" && flag != "--stop-at-rest" && flag != "--max-wall" &&
         !implicit_sim::FindOptionByRunnerFlag(flag)) {
       throw std::invalid_argument("unknown flag '" + flag + "' (" + kUsage + ")");
     }
@@ -107,6 +122,10 @@ Args ParseArgs(int argc, char** argv) {
   args.out = values["--out"];
   args.duration = ParsePositive("--duration", values["--duration"]);
   args.check_penetration = values.count("--check-penetration") > 0;
+  if (values.count("--max-wall")) {
+    args.max_wall = ParsePositive("--max-wall (s)", values["--max-wall"]);
+    CheckAtMost("--max-wall (s)", args.max_wall, 1e7);
+  }
   ParseStepperFlags(values, &args.options);
   if (values.count("--stop-at-rest")) {
     const std::string& text = values["--stop-at-rest"];
@@ -169,8 +188,22 @@ int main(int argc, char** argv) {
     summary.penetration_checked = args.check_penetration;
     std::unique_ptr<Data> check_data;  // the check's own broad-phase workspace
     if (args.check_penetration) check_data = std::make_unique<Data>(model);
+    data.interrupt = &g_interrupt;
+    if (args.max_wall > 0.0) {
+      g_interrupt.SetDeadline(StepInterrupt::Clock::now() +
+                              std::chrono::duration_cast<StepInterrupt::Clock::duration>(
+                                  std::chrono::duration<double>(args.max_wall)));
+    }
+    std::signal(SIGINT, OnStopSignal);
+    std::signal(SIGTERM, OnStopSignal);
     for (long i = 0; i < steps; ++i) {
       const StepReport report = Step(model, options, &state, &data);
+      if (report.fault == StepFault::kInterrupted) {
+        summary.stop_reason = g_interrupt.requested() ? "interrupted" : "max_wall";
+        std::cerr << "implicit_sim_run: " << (g_interrupt.requested() ? "interrupted by a signal" : "--max-wall reached")
+                  << " in step " << i + 1 << "; stopping at t = " << FormatNumber(state.t) << " s\n";
+        break;
+      }
       if (!report.advanced) {
         std::cerr << "implicit_sim_run: step " << i + 1 << " refused (" << StepFaultName(report.fault)
                   << (report.fault_detail.empty() ? "" : ": " + report.fault_detail) << "); stopping at t = "
@@ -206,6 +239,7 @@ int main(int argc, char** argv) {
               << FormatNumber(1e6 * summary.wall_s / std::max(1, summary.steps)) << " us/step, max penetration "
               << FormatNumber(summary.max_penetration) << " m, non-converged steps " << summary.nonconverged_steps
               << "; wrote " << args.out << "/trajectory.csv and summary.json\n";
+    if (summary.stop_reason == "interrupted" || summary.stop_reason == "max_wall") return 3;
     return summary.nonconverged_steps == 0 && summary.stop_reason != "refused" ? 0 : 1;
   } catch (const std::exception& e) {
     std::cerr << "implicit_sim_run: " << OneLine(e.what()) << "\n";

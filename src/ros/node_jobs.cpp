@@ -70,7 +70,11 @@ void SimNode::OnRunStepsGoal(const implicit_sim::RunStepsGoalConstPtr& goal) {
         feedback.sim_time = now.sim_time;
         run_steps_server_->publishFeedback(feedback);
       },
-      [this] { return run_steps_server_->isPreemptRequested() || !ros::ok(); });
+      [this] {
+        if (!run_steps_server_->isPreemptRequested() && ros::ok()) return false;
+        interrupt_.Request();  // the job step in progress stops too; StepOnce clears the request
+        return true;
+      });
   result.steps_done = job.done;
   result.sim_time = job.sim_time;
   result.success = job.finished && job.success;

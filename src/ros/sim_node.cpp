@@ -18,8 +18,8 @@ namespace {
 
 using WallClock = std::chrono::steady_clock;
 
-// How long shutdown waits for a step in progress (a step of a large pile can take seconds) before the node exits
-// without it; roslaunch escalates SIGINT to SIGTERM only after 15 s.
+// How long shutdown waits for the step in progress to stop (it is interrupted between two factorizations, so this is
+// a safety net) before the node exits without it; roslaunch escalates SIGINT to SIGTERM only after 15 s.
 constexpr double kShutdownGraceS = 2.0;
 // At real time, a simulation that fell behind by more than this (s of wall time; a slow step) goes on at the real-time
 // pace from where it is instead of catching up in a burst faster than real time.
@@ -68,7 +68,8 @@ void SimNode::Run() {
   run_steps_server_->start();
   ros::waitForShutdown();
   if (!StopThreads(kShutdownGraceS)) {
-    // The core's step cannot be interrupted: exit without it (nothing is lost; ROS is already shut down).
+    // The step did not stop in time (a single factorization or Ipopt iteration that long): exit without it (nothing is
+    // lost; ROS is already shut down).
     std::fprintf(stderr, "implicit_sim: a step was still running %g s after shutdown; exiting without it\n",
                  kShutdownGraceS);
     std::fflush(nullptr);
@@ -92,6 +93,7 @@ void SimNode::StartThread(std::thread* thread, void (SimNode::*loop)()) {
 
 bool SimNode::StopThreads(double grace_s) {
   stopping_ = true;
+  interrupt_.Request();  // the step in progress stops between two factorizations
   mailbox_.Stop();
   {
     std::unique_lock<std::mutex> lock(stop_mutex_);
@@ -113,7 +115,7 @@ CommandContext SimNode::Context() const {
   return CommandContext{SimTime(), live_->Live(), params_.world_frame};
 }
 
-void SimNode::StepOnce(double rtf) {
+bool SimNode::StepOnce(double rtf) {
   live_->CopySolverOptions(&options_);
   std::string replay_refusal;
   if (journal_->replaying() &&
@@ -121,17 +123,22 @@ void SimNode::StepOnce(double rtf) {
           step_count_, [this](const JournalRecord& r, std::string* refusal) { return ApplyJournalRecord(r, refusal); },
           &replay_refusal)) {
     RefuseReplayStep(replay_refusal);
-    return;
+    return true;
   }
   ComputeStepWrench(Context(), options_.h, world_.get());
   World& w = *world_;
   StepReport report;
+  w.data->interrupt = &interrupt_;
   try {
     report = Step(*w.model, options_, &w.state, w.data.get(), &w.wrench_W);
   } catch (const std::exception& e) {
     report.advanced = false;
     report.fault = StepFault::kNoFiniteSolution;
     report.fault_detail = e.what();
+  }
+  if (report.fault == StepFault::kInterrupted) {  // undone: no step, no fault (a cancelled job, or shutdown)
+    if (!stopping_) interrupt_.Clear();
+    return false;
   }
   ++step_count_;
   std::string failure;
@@ -154,6 +161,7 @@ void SimNode::StepOnce(double rtf) {
   SaveSnapshot();
   publisher_->PublishClockThrottled(SimTime(), !report.advanced);
   publisher_->PublishStepStats(report, SimTime(), step_count_, rtf);
+  return true;
 }
 
 // The replay cannot go on: pause (and end a ~step or ~run_steps job) before the step, which is not taken.
@@ -206,8 +214,7 @@ void SimNode::PhysicsLoop() {
     const PhysicsMailbox::Work work = mailbox_.WaitForWork(!paused_);
     if (work == PhysicsMailbox::Work::kStop) return;
     if (work == PhysicsMailbox::Work::kJobStep) {
-      StepOnce(0.0);  // a refused step ends the job itself
-      mailbox_.CountJobStep(SimTime());
+      if (StepOnce(0.0)) mailbox_.CountJobStep(SimTime());  // a refused step ends the job itself
       continue;
     }
     if (paused_) continue;

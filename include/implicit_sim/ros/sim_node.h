@@ -25,6 +25,7 @@
 #include <std_srvs/Trigger.h>
 #include <trajectory_msgs/JointTrajectory.h>
 
+#include "implicit_sim/core/base/interrupt.h"
 #include "implicit_sim/ApplyBodyWrench.h"
 #include "implicit_sim/BodyWrench.h"
 #include "implicit_sim/Delete.h"
@@ -86,7 +87,9 @@ class SimNode {
   double SimTime() const { return time_offset_ + world_->state.t; }
   CommandContext Context() const;
   void PhysicsLoop();
-  void StepOnce(double rtf);  // one step with the commanded wrenches
+  // One step with the commanded wrenches; false if it was interrupted (interrupt_: a cancelled job, shutdown) and so
+  // not taken.
+  bool StepOnce(double rtf);
   void ResetWorld();          // bodies back to the initial state, warm start and commands cleared
   void SaveSnapshot();        // the current state as the latest snapshot (NodePublisher::Store)
   void RefuseReplayStep(const std::string& refusal);
@@ -149,6 +152,8 @@ class SimNode {
 
   // Every thread ends: the physics thread after the step in progress, the others at once.
   std::atomic<bool> stopping_{false};
+  // Stops the step in progress (Data::interrupt) when a ~run_steps job is cancelled and at shutdown.
+  StepInterrupt interrupt_;
   std::mutex stop_mutex_;
   std::condition_variable stop_cv_;  // wakes the publish and diagnostics threads' waits, and StopThreads
   int threads_started_ = 0, threads_ended_ = 0;  // guarded by stop_mutex_

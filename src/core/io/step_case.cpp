@@ -126,8 +126,10 @@ Model LoadStepCaseModel(const StepCase& step_case) {
   return model;
 }
 
-StepReport ReplayStepCase(const Model& model, const StepCase& step_case, State* end_state) {
+StepReport ReplayStepCase(const Model& model, const StepCase& step_case, State* end_state,
+                          const StepInterrupt* interrupt) {
   Data data(model, step_case.broad_phase ? Data::PairSelection::kBroadPhase : Data::PairSelection::kAllPairs);
+  data.interrupt = interrupt;
   try {
     RestoreWarmStart(model, step_case.inputs.warm_start, &data);
   } catch (const std::invalid_argument& e) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <vector>
 
 #include <IpSolveStatistics.hpp>
@@ -19,7 +20,8 @@ using Ipopt::Number;
 class PenaltyNlp : public CapturingTnlp {
  public:
   int evaluations() const { return evaluations_; }
-  PenaltyNlp(const NcpProblem& problem, const Eigen::VectorXd& z0) : CapturingTnlp(z0), problem_(problem), z0_(z0) {
+  PenaltyNlp(const NcpProblem& problem, const Eigen::VectorXd& z0, const StepInterrupt* interrupt)
+      : CapturingTnlp(z0), problem_(problem), z0_(z0), interrupt_(interrupt) {
     raw_mode_.raw = true;
     const int n = problem.size();
     scale_.assign(n, 0.0);
@@ -36,6 +38,12 @@ class PenaltyNlp : public CapturingTnlp {
     nnz_h_lag = 0;      // limited-memory Hessian approximation
     style = TNLP::C_STYLE;
     return true;
+  }
+
+  // Ipopt stops (User_Requested_Stop) once the interrupt is due.
+  bool intermediate_callback(Ipopt::AlgorithmMode, Index, Number, Number, Number, Number, Number, Number, Number,
+                             Number, Index, const Ipopt::IpoptData*, Ipopt::IpoptCalculatedQuantities*) override {
+    return !InterruptDue(interrupt_);
   }
 
   bool get_bounds_info(Index n, Number* x_l, Number* x_u, Index, Number* g_l, Number* g_u) override {
@@ -119,6 +127,7 @@ class PenaltyNlp : public CapturingTnlp {
   const NcpProblem& problem_;
   NcpEvalMode raw_mode_;
   Eigen::VectorXd z0_, raw_;
+  const StepInterrupt* interrupt_;
   SparseJacobian jacobian_;  // the pattern is fixed for the solve: every entry is emitted at every evaluation
   std::vector<double> scale_;
   bool evaluated_ = false;
@@ -129,10 +138,15 @@ class PenaltyNlp : public CapturingTnlp {
 
 NcpSummary SolveNcpWithIpopt(const NcpProblem& problem, const IpoptNcpOptions& options, Eigen::VectorXd* z) {
   NcpSummary summary;
+  if (InterruptDue(options.interrupt)) {
+    summary.termination = NcpTermination::kInterrupted;
+    summary.residual = std::numeric_limits<double>::infinity();
+    return summary;
+  }
   bool solved = false;
   try {
     const std::lock_guard<std::mutex> lock(IpoptMutex());
-    Ipopt::SmartPtr<PenaltyNlp> nlp = new PenaltyNlp(problem, *z);
+    Ipopt::SmartPtr<PenaltyNlp> nlp = new PenaltyNlp(problem, *z, options.interrupt);
     IpoptSettings settings;
     settings.tol = options.ipopt_tol;
     settings.acceptable_tol = options.ipopt_acceptable_tol;
@@ -156,7 +170,7 @@ NcpSummary SolveNcpWithIpopt(const NcpProblem& problem, const IpoptNcpOptions& o
   if (!std::isfinite(error.equations) || !std::isfinite(error.complementarity)) {
     summary.termination = NcpTermination::kNonFinite;
   } else if (!solved) {
-    summary.termination = NcpTermination::kSolverFailure;
+    summary.termination = InterruptDue(options.interrupt) ? NcpTermination::kInterrupted : NcpTermination::kSolverFailure;
   } else {
     summary.converged = summary.residual <= options.tolerance;
     summary.termination = summary.converged ? NcpTermination::kConverged : NcpTermination::kInaccurate;

@@ -12,6 +12,7 @@ const char* NcpTerminationName(NcpTermination termination) {
     case NcpTermination::kNonFinite: return "non_finite";
     case NcpTermination::kInaccurate: return "inaccurate";
     case NcpTermination::kSolverFailure: return "solver_failure";
+    case NcpTermination::kInterrupted: return "interrupted";
   }
   return "unknown";
 }

@@ -201,6 +201,10 @@ NcpSummary SemismoothNewton::Solve(const NcpProblem& problem, const NewtonOption
       break;
     }
     if (summary.residual <= tolerance()) break;
+    if (InterruptDue(options.interrupt)) {
+      summary.termination = NcpTermination::kInterrupted;
+      break;
+    }
     if (!Step(problem, options, merit, summary.iterations, z)) {
       summary.termination = NcpTermination::kNoDescent;
       break;
@@ -245,7 +249,7 @@ NcpSummary SemismoothNewton::FollowSmoothingPath(const NcpProblem& problem, cons
       history_count_ = history_next_ = 0;  // the merits of another level do not compare
       continue;
     }
-    if (summary.path_iterations == path.max_iterations) break;
+    if (summary.path_iterations == path.max_iterations || InterruptDue(options.interrupt)) break;
     if (level_steps == path.steps_per_level) {  // the level is too tight for this iterate: widen it once
       if (raised) break;                         // or, widened, still not reached: leave the path
       mu *= 2.0;

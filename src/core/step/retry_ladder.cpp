@@ -196,7 +196,9 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
     rest.max_iterations -= warm.iterations;
     warm = ladder.Solve(rest);
   }
-  if (warm.converged) return warm;
+  // A due interrupt (Data::interrupt) ends the ladder after any rung: the step is abandoned (time_stepper.cpp).
+  const auto interrupted = [&options]() { return InterruptDue(options.newton.interrupt); };
+  if (warm.converged || interrupted()) return warm;
   if (warm_rungs_only) {  // rung 1a within the budget, and no further
     if (problem.UseFallbackFrames() > 0) {
       report->end_frame_retries++;
@@ -229,12 +231,13 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
       ProjectedRetry(later_options, &ladder, &warm)) {
     return warm;
   }
+  if (interrupted()) return warm;
   // Rung 2: a cold start, keeping the failed warm attempt and its tangent axes.
   report->cold_restarts++;
   island->axes_warm_failed = island->layout.tangent_axes();
   SeedColdStart(model, state, problem, &island->layout, &island->z_start);
   const NcpSummary cold = SolveFromStart(later_options, &ladder);
-  if (cold.converged || later_options.solver == StepperOptions::Solver::kIpopt) return cold;
+  if (cold.converged || later_options.solver == StepperOptions::Solver::kIpopt || interrupted()) return cold;
   // The better of the two (with its tangent axes) is kept in z_best, and the Ipopt rung starts from it.
   BestAttempt best(cold);
   if (!(cold.residual < warm.residual) && std::isfinite(warm.residual)) {
@@ -250,8 +253,9 @@ NcpSummary SolveWithRetryLadder(const Model& model, const StepperOptions& option
     if (ProximalPoint(later_options, &ladder, &best, &summary)) return summary;
     island->z.swap(island->z_cold);  // the continuation starts where the cold attempt ended, as without the rung
   }
-  if (SmoothingContinuation(later_options, &ladder, &best, &summary)) return summary;
-  if ((last_chance || problem.size() <= kIpoptFirstSizeLimit) && IpoptThenNewton(later_options, &ladder, &best, &summary)) {
+  if (!interrupted() && SmoothingContinuation(later_options, &ladder, &best, &summary)) return summary;
+  if (!interrupted() && (last_chance || problem.size() <= kIpoptFirstSizeLimit) &&
+      IpoptThenNewton(later_options, &ladder, &best, &summary)) {
     return summary;
   }
   island->z = island->z_best;

@@ -61,6 +61,7 @@ const char* StepFaultName(StepFault fault) {
     case StepFault::kInitialOverlap: return "initial_overlap";
     case StepFault::kDiverged: return "diverged";
     case StepFault::kCrossing: return "crossing";
+    case StepFault::kInterrupted: return "interrupted";
   }
   return "unknown";
 }

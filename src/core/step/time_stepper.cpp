@@ -213,6 +213,14 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
   State* state = in.state;
   IslandScheme* scheme = &island->SchemeFor(options.scheme);
   StepReport* report = &island->report;
+  // A due interrupt abandons the island (and with it the step, which Step then undoes), before a solve and after one.
+  const auto interrupted = [&]() {
+    if (!InterruptDue(options.newton.interrupt)) return false;
+    report->converged = false;
+    report->fault = StepFault::kInterrupted;
+    return true;
+  };
+  if (interrupted()) return false;
   Eigen::VectorXd& backup = island->z_backup[depth];
   backup = island->z;
   const bool had_warm_start = island->has_warm_start;
@@ -244,6 +252,7 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
     scheme = scheme->fallback();
     result = SolveIslandStep(in, *scheme, last_chance, LadderReach::kAllRungs, island, &crossed);
   }
+  if (!result.converged && interrupted()) return false;
   const Eigen::VectorXd& z_velocity = scheme->velocity_solution(*island);
   if (!result.converged && depth < Data::kMaxSubstepDepth) {
     island->z = backup;
@@ -407,10 +416,12 @@ void CheckJointDrives(const Model& model, const Data& data) {
 
 }  // namespace
 
-StepReport Step(const Model& model, const StepperOptions& options, State* state, Data* data,
+StepReport Step(const Model& model, const StepperOptions& user_options, State* state, Data* data,
                 const Eigen::VectorXd* external_wrench_W) {
   std::string error;
-  if (!options.IsValid(&error)) throw std::invalid_argument(error);
+  if (!user_options.IsValid(&error)) throw std::invalid_argument(error);
+  StepperOptions options = user_options;  // every solver of the step watches the caller's interrupt
+  options.newton.interrupt = data->interrupt;
   if (!data->BelongsTo(model)) {
     throw std::invalid_argument("Data was built from another Model: build it as Data(model) from the Model given to Step");
   }
@@ -422,6 +433,10 @@ StepReport Step(const Model& model, const StepperOptions& options, State* state,
   CheckJointDrives(model, *data);
   const auto wall_start = std::chrono::steady_clock::now();
   StepReport report;
+  if (InterruptDue(data->interrupt)) {  // nothing done: the warm start stays
+    report.fault = StepFault::kInterrupted;
+    return report;
+  }
   report.converged = true;
   if (!data->has_warm_start &&
       FindInitialOverlap(model, *state, options.overlap_tolerance, data, &report.fault_detail)) {

@@ -69,8 +69,10 @@ Model LoadStepCaseModel(const StepCase& step_case);
 
 // Runs the case's step once: a fresh Data(model) with the case's pair selection, its warm start restored, Step from
 // its state with its options and wrench. `model` must be LoadStepCaseModel(step_case). Sets *end_state to the state
-// after the step. Throws std::invalid_argument naming the case when the warm start does not fit the model.
-StepReport ReplayStepCase(const Model& model, const StepCase& step_case, State* end_state);
+// after the step. Throws std::invalid_argument naming the case when the warm start does not fit the model. The step
+// watches `interrupt` if given (Data::interrupt).
+StepReport ReplayStepCase(const Model& model, const StepCase& step_case, State* end_state,
+                          const StepInterrupt* interrupt = nullptr);
 
 // The highest rung of the retry ladder a step reached, from its report's counts: "warm" (or "cold" for a step without
 // warm start) when the first solve converged, then "cold", "smoothing", "ipopt", "substeps" (with Ipopt as the

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 
+#include "implicit_sim/core/base/interrupt.h"
 #include "implicit_sim/core/ncp/ncp_problem.h"
 #include "implicit_sim/core/ncp/ncp_summary.h"
 
@@ -19,6 +20,8 @@ struct IpoptNcpOptions {
   // Converged when Ipopt reports a solution and max(equation residual, complementarity error) (ncp_error.h) is at
   // most this.
   double tolerance = 1e-8;
+  // When set and due, Ipopt stops at its next iteration (NcpTermination::kInterrupted).
+  const StepInterrupt* interrupt = nullptr;
 };
 
 // Solves from *z (the initial guess) in place. Never throws; a failure is reported in the summary (z is then left as

@@ -13,6 +13,7 @@ enum class NcpTermination {
   kNonFinite,      // the residual at the iterate is not finite
   kInaccurate,     // the solver reported a solution whose error (ncp_error.h) exceeds the tolerance
   kSolverFailure,  // the solver reported a failure of its own (Ipopt: infeasible, restoration failed, ...)
+  kInterrupted,    // its StepInterrupt (base/interrupt.h) was due: stopped between iterations
 };
 const char* NcpTerminationName(NcpTermination termination);  // "converged", "max_iterations", ...
 

@@ -20,6 +20,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCholesky>
 
+#include "implicit_sim/core/base/interrupt.h"
 #include "implicit_sim/core/ncp/condensed_lu.h"
 #include "implicit_sim/core/ncp/ncp_problem.h"
 #include "implicit_sim/core/ncp/ncp_summary.h"
@@ -64,6 +65,9 @@ struct NewtonOptions {
   bool condense_blocks = true;
   // When set, every iteration appends a row (not an option of the table: the replay tool's --trace).
   NewtonTrace* trace = nullptr;
+  // When set and due, a solve stops before its next iteration (NcpTermination::kInterrupted); not an option of the
+  // table: the stepper sets it from Data::interrupt.
+  const StepInterrupt* interrupt = nullptr;
   // The allowed ranges are those of the step's options table (step/options.h), which validates these fields.
 };
 

@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 
+#include "implicit_sim/core/base/interrupt.h"
 #include "implicit_sim/core/base/thread_pool.h"
 #include "implicit_sim/core/geometry/broad_phase.h"
 #include "implicit_sim/core/model/joints.h"
@@ -123,6 +124,10 @@ class Data {
   // MuJoCo's mjData.ctrl. Step refuses invalid ones (CheckJointDrive). Turning drives on or off changes the layout of
   // z (LayOutDrives); the warm start is carried over. ---
   std::vector<JointDrive> joint_drives;
+  // --- input: a cooperative stop (base/interrupt.h; null: none), owned by the caller. When it is due (a request from
+  // another thread or a signal handler, or a deadline), the step's solvers stop between factorizations and Step
+  // returns StepFault::kInterrupted with the state as before the step (the next step then starts cold). ---
+  const StepInterrupt* interrupt = nullptr;
   // --- outputs: the contact results of the last step, one per pair in its NCP (contacts[i].pair is the model
   // pair). With every pair in the NCP, contacts[c] belongs to model pair c. ---
   std::vector<ContactResult> contacts;

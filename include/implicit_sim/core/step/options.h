@@ -57,6 +57,7 @@ struct StepperOptions {
   IpoptNcpOptions IpoptOptions() const {
     IpoptNcpOptions ipopt;
     ipopt.max_iterations = ipopt_max_iterations;
+    ipopt.interrupt = newton.interrupt;
     return ipopt;
   }
 };

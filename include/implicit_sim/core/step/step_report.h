@@ -6,8 +6,8 @@
 
 namespace implicit_sim {
 
-// Why a step was not accepted as a good one. With kInitialOverlap, kDiverged, kNoFiniteSolution and kCrossing the state
-// is left exactly as it was before the step (StepReport::advanced is false).
+// Why a step was not accepted as a good one. With kInitialOverlap, kDiverged, kNoFiniteSolution, kCrossing and
+// kInterrupted the state is left exactly as it was before the step (StepReport::advanced is false).
 enum class StepFault {
   kNone,
   kNotConverged,      // advanced with the best iterate found, reported as not converged (the retry ladder ran out)
@@ -15,10 +15,11 @@ enum class StepFault {
   kInitialOverlap,    // a cold step started with two bodies overlapping by more than overlap_tolerance
   kDiverged,          // the end velocities exceed max_speed or max_angular_speed
   kCrossing,          // a body passed through another even in the shortest sub-step (step_health.h, FindCrossing)
+  kInterrupted,       // Data::interrupt was due (a request or a deadline, base/interrupt.h): the step was abandoned
 };
-constexpr int kNumStepFaults = 6;            // StepFault's values, kNone included
+constexpr int kNumStepFaults = 7;            // StepFault's values, kNone included
 const char* StepFaultName(StepFault fault);  // "none", "not_converged", "no_finite_solution", "initial_overlap", "diverged",
-                                             // "crossing"
+                                             // "crossing", "interrupted"
 
 struct StepReport {
   bool converged = false;       // the NCP (every sub-step's, if the step was split) was solved to tolerance

@@ -26,7 +26,8 @@ namespace implicit_sim {
 // constant applied wrench). data->joint_drives holds the joints' PD drives over the step (joints.h, JointDrive;
 // data->joint_drive_effort receives their efforts). Throws std::invalid_argument for invalid options, a state
 // CheckState refuses (size, non-finite value, quaternion not of unit norm), a wrench vector whose size does not match the model, a non-finite wrench, or a drive CheckJointDrive refuses (the
-// message names the joint), and then changes nothing; solver trouble is reported, never thrown.
+// message names the joint), and then changes nothing; solver trouble is reported, never thrown. With data->interrupt
+// due (base/interrupt.h) the step stops between factorizations and is undone (StepFault::kInterrupted).
 StepReport Step(const Model& model, const StepperOptions& options, State* state, Data* data,
                 const Eigen::VectorXd* external_wrench_W = nullptr);
 
