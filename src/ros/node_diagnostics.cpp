@@ -89,7 +89,8 @@ void NodeDiagnostics::Update(diagnostic_updater::DiagnosticStatusWrapper& status
     status.add(std::string("received_") + kCommandKeyNames[k] + "_commands", c.received[k]);
     status.add(std::string("dropped_") + kCommandKeyNames[k] + "_commands", c.dropped[k]);
   }
-  for (int f = 1; f < kNumStepFaults; ++f) {  // every fault but kNone
+  for (int f = 1; f < kNumStepFaults; ++f) {  // every fault but kNone and kInterrupted (an undone step: no fault)
+    if (static_cast<StepFault>(f) == StepFault::kInterrupted) continue;
     status.add(std::string("faults_") + StepFaultName(static_cast<StepFault>(f)), c.faults[f]);
   }
   status.add("real_time_factor", c.rtf);

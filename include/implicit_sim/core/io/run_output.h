@@ -41,7 +41,7 @@ struct RunSummary {
   // The friction parameters of the pairs with trajectory columns ("pairs" in the JSON; empty: the key is left out).
   std::vector<std::pair<std::string, FrictionParams>> pairs;
   double t_end = 0.0;                  // simulated time at the end of the run (s)
-  std::string stop_reason = "duration";  // "duration", "at_rest" or "refused"
+  std::string stop_reason = "duration";  // "duration", "at_rest", "refused", "max_wall" or "interrupted"
   bool at_rest_rule = false;           // the run had a stop-at-rest rule: "time_to_rest" is written
   double time_to_rest = -1.0;          // s; < 0: did not come to rest ("time_to_rest": null)
   bool penetration_checked = false;    // the run checked every step end geometrically: "max_penetration_oracle"
