@@ -14,6 +14,7 @@ void SemismoothNewton::Resize(int n) {
     J_.resize(n, n);
     normal_.resize(n, n);
     lu_dense_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n);
+    cod_ = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(n, n);
     ldlt_ = Eigen::LDLT<Eigen::MatrixXd>(n);
   }
   Phi_.resize(n);
@@ -67,11 +68,16 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
       // condition number, which grows as 1/h; doc/method.md, pitfall 8.)
       lu_dense_.compute(J_);
       ++summary_->factorizations;
-      // A (numerically) singular J, such as the locked axes of the planar disc give: no Newton direction. (Its LU
-      // direction would be huge and exhaust the line search before the LM direction is tried.)
-      if (!(lu_dense_.rcond() > 1e-13)) return false;
       ++summary_->solves;
-      dz_.noalias() = lu_dense_.solve(-Phi_);
+      if (lu_dense_.rcond() > 1e-13) {
+        dz_.noalias() = lu_dense_.solve(-Phi_);
+        return dz_.allFinite();
+      }
+      // A (numerically) singular J, such as a planar body's line contact gives: its LU direction would be huge and
+      // exhaust the line search. The minimum-norm direction leaves the undetermined unknowns where they are.
+      cod_.compute(J_);
+      ++summary_->factorizations;
+      dz_.noalias() = cod_.solve(-Phi_);
       return dz_.allFinite();
     }
     // Levenberg-Marquardt: (J^T J + lambda I) dz = -J^T Phi.

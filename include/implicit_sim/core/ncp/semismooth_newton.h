@@ -4,8 +4,11 @@
 // see sparse_lu.h, the Jacobian assembled in compressed columns) for large ones. P is the problem's choice of diagonal
 // entries (NcpEvalMode::regularization; the step puts it on its normal-force and friction rows): a proximal term that
 // keeps the system regular where contact forces are redundant (a body resting on several others) while the residual,
-// and so the solution, stays exact. If the LU fails or its direction does not decrease the merit, the
-// Levenberg-Marquardt normal equations (J^T J + lambda I) dz = -J^T Phi are solved instead (dense or sparse LDL^T).
+// and so the solution, stays exact. Where a dense J is numerically singular (unknowns that no row determines: the
+// closest points along a line contact of a planar body), the direction is the minimum-norm least-squares solution of
+// J dz = -Phi by a complete orthogonal decomposition (rank-revealing, without squaring J's condition number). If that
+// fails too or its direction does not decrease the merit, the Levenberg-Marquardt normal equations
+// (J^T J + lambda I) dz = -J^T Phi are solved instead (dense or sparse LDL^T).
 // A sparse solve first condenses the problem's local blocks (the step's closest-point unknowns) out of the Newton
 // matrix (condensed_lu.h), and factorizes the whole matrix only when that fails.
 // The workspace is sized once per layout; a dense Solve does not allocate.
@@ -17,6 +20,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <Eigen/QR>
 #include <Eigen/Core>
 #include <Eigen/SparseCholesky>
 
@@ -123,6 +127,7 @@ class SemismoothNewton {
   Eigen::MatrixXd J_, normal_;
   Eigen::VectorXd Phi_, Phi_trial_, z_trial_, rhs_, dz_;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_dense_;
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod_;  // a singular dense J's minimum-norm direction
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
   SparseJacobian J_sparse_;
   SparseLu lu_;

@@ -182,7 +182,11 @@ void RattleVelocityProblem::AddPairRows(const RowContext& ctx, int c) const {
   const double e[5] = {fr.e_t, fr.e_o, fr.e_r, fr.e_roll, fr.e_roll};
   const Vec3 dirs[5] = {t, o, zero, zero, zero}, dirs_w[5] = {zero, zero, n, t, o};
   const double rates[5] = {t.dot(v_rel), o.dot(v_rel), n.dot(w_rel), t.dot(w_rel), o.dot(w_rel)};
-  for (int k = 0; k < friction.count; ++k) add_rates(friction.Row(k), on * e[k], dirs[k], dirs_w[k]);
+  for (int k = 0; k < friction.count; ++k) {  // a component on locked velocities only: s_k = 0 (friction_rows.h)
+    friction.locked[k] = closed && FrictionComponentLocked(ctx.layout, e1, dirs[k], r1.cross(dirs[k]) + dirs_w[k], e2,
+                                                           dirs[k], r2.cross(dirs[k]) + dirs_w[k]);
+    add_rates(friction.Row(k), friction.locked[k] ? 0.0 : on * e[k], dirs[k], dirs_w[k]);
+  }
   if (closed) {  // the friction of the total: e_k rate_k + S_k sigma = 0, 0 <= sigma _|_ 1 - |S|^2 >= 0
     friction.sigma = blk.sigma();
     friction.sigma_value = sigma;

@@ -205,6 +205,20 @@ void AddContactRows(const RowContext& ctx, int c, const ContactRowOptions& optio
   friction.gap = off + pi::kD;
   friction.dslip_dgap = options.regular_separated_friction && d > 0.0 ? 1.0 / h : 0.0;
   friction.zeta = 1.0 - st * st - so * so - sr * sr;
+  // Components whose rates read only locked velocities, in the end frame and the start frame (a planar body's o and
+  // torsion): their slip rows hold s_k = 0 and the rate's derivatives below are emitted as zeros.
+  const auto locked_along = [&](const Vec3& u, const Vec3& u0) {
+    return FrictionComponentLocked(ctx.layout, e1, u, r1.cross(u), e2, u, r2.cross(u)) &&
+           FrictionComponentLocked(ctx.layout, e1, u0, r1_0.cross(u0), e2, u0, r2_0.cross(u0));
+  };
+  const auto locked_about = [&](const Vec3& u) {
+    return FrictionComponentLocked(ctx.layout, e1, Vec3::Zero(), u, e2, Vec3::Zero(), u);
+  };
+  friction.locked[0] = locked_along(t, t0);
+  friction.locked[1] = locked_along(o, o0);
+  friction.locked[2] = locked_about(n_bar);
+  const double on_t = friction.locked[0] ? 0.0 : 1.0, on_o = friction.locked[1] ? 0.0 : 1.0,
+               on_r = friction.locked[2] ? 0.0 : 1.0;
   // Rolling resistance: e_roll (t_bar . w_rel) + s_q1 slip = 0 and likewise about o_bar (the averaged frame, as n_bar).
   const bool rolling = blk.rolling > 0;
   const Vec3 t_bar = end_weight * t + start_weight * t0, o_bar = end_weight * o + start_weight * o0;
@@ -214,6 +228,8 @@ void AddContactRows(const RowContext& ctx, int c, const ContactRowOptions& optio
     friction.roll_row = rq;
     friction.rate[3] = fr.e_roll * t_bar.dot(w_rel);
     friction.rate[4] = fr.e_roll * o_bar.dot(w_rel);
+    friction.locked[3] = locked_about(t_bar);
+    friction.locked[4] = locked_about(o_bar);
     friction.s[3] = z[rq];
     friction.s[4] = z[rq + 1];
     friction.zeta -= z[rq] * z[rq] + z[rq + 1] * z[rq + 1];
@@ -225,20 +241,21 @@ void AddContactRows(const RowContext& ctx, int c, const ContactRowOptions& optio
   AddFrictionRows(friction, out);
   const int rt = off + pi::kSt, ro = off + pi::kSo, rr = off + pi::kSr;
   if (want_J) {
-    add(rt, off + pi::kN, Eigen::RowVector3d(end_weight * fr.e_t * v_rel.transpose() * dt_dn));
-    add(ro, off + pi::kN, Eigen::RowVector3d(end_weight * fr.e_o * v_rel.transpose() * do_dn));
-    add(rr, off + pi::kN, Eigen::RowVector3d(end_weight * fr.e_r * w_rel.transpose()));
-    add_rel_velocity(rt, end_weight * fr.e_t, t, start_weight * fr.e_t, t0);
-    add_rel_velocity(ro, end_weight * fr.e_o, o, start_weight * fr.e_o, o0);
-    if (e1.col >= 0) add(rr, e1.col + 3, Eigen::RowVector3d(fr.e_r * n_bar.transpose()));
-    if (e2.col >= 0) add(rr, e2.col + 3, Eigen::RowVector3d(-fr.e_r * n_bar.transpose()));
+    add(rt, off + pi::kN, Eigen::RowVector3d(on_t * end_weight * fr.e_t * v_rel.transpose() * dt_dn));
+    add(ro, off + pi::kN, Eigen::RowVector3d(on_o * end_weight * fr.e_o * v_rel.transpose() * do_dn));
+    add(rr, off + pi::kN, Eigen::RowVector3d(on_r * end_weight * fr.e_r * w_rel.transpose()));
+    add_rel_velocity(rt, on_t * end_weight * fr.e_t, t, on_t * start_weight * fr.e_t, t0);
+    add_rel_velocity(ro, on_o * end_weight * fr.e_o, o, on_o * start_weight * fr.e_o, o0);
+    if (e1.col >= 0) add(rr, e1.col + 3, Eigen::RowVector3d(on_r * fr.e_r * n_bar.transpose()));
+    if (e2.col >= 0) add(rr, e2.col + 3, Eigen::RowVector3d(-on_r * fr.e_r * n_bar.transpose()));
     if (rolling) {
       const Vec3 axes[2] = {t_bar, o_bar};
       const Mat3* daxis_dn[2] = {&dt_dn, &do_dn};
       for (int k = 0; k < 2; ++k) {
-        add(rq + k, off + pi::kN, Eigen::RowVector3d(end_weight * fr.e_roll * w_rel.transpose() * *daxis_dn[k]));
-        if (e1.col >= 0) add(rq + k, e1.col + 3, Eigen::RowVector3d(fr.e_roll * axes[k].transpose()));
-        if (e2.col >= 0) add(rq + k, e2.col + 3, Eigen::RowVector3d(-fr.e_roll * axes[k].transpose()));
+        const double on = friction.locked[3 + k] ? 0.0 : 1.0;
+        add(rq + k, off + pi::kN, Eigen::RowVector3d(on * end_weight * fr.e_roll * w_rel.transpose() * *daxis_dn[k]));
+        if (e1.col >= 0) add(rq + k, e1.col + 3, Eigen::RowVector3d(on * fr.e_roll * axes[k].transpose()));
+        if (e2.col >= 0) add(rq + k, e2.col + 3, Eigen::RowVector3d(-on * fr.e_roll * axes[k].transpose()));
       }
     }
   }

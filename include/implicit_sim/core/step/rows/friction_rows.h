@@ -5,13 +5,18 @@
 //   ellipsoid row    FB(sigma, zeta) = 0,  zeta = 1 - sum s_k^2   (sigma _|_ the friction ellipsoid, paper eq. 5)
 // slip is the slip speed sigma as the rows read it (ProjectedSlip; plus max(d, 0) / h with the separated-friction
 // regularization). The derivatives of rate_k by the velocities, the normal and the closest points depend on the
-// frame and are emitted by the caller.
+// frame and are emitted by the caller (times 0 for a locked component).
+// A locked component (FrictionComponentLocked: its rate reads only locked velocities, a planar body's out-of-plane
+// friction) has the slip row s_k = 0 instead: the locks carry that force. Its fraction would otherwise be free while
+// the contact sticks (a singular Newton matrix at every step of a planar scene) and would take a share of the
+// ellipsoid that belongs to the free directions.
 #pragma once
 
 #include <Eigen/Core>
 
 #include "implicit_sim/core/base/types.h"
 #include "implicit_sim/core/model/model.h"
+#include "implicit_sim/core/step/kinematics.h"
 #include "implicit_sim/core/step/layout.h"
 #include "implicit_sim/core/step/rows/row_writer.h"
 
@@ -24,6 +29,7 @@ struct FrictionRows {
   int count = 1;       // 1 (a joint), 3 (a contact: t, o, r) or 5 (a contact with rolling resistance: t, o, r, q1, q2)
   int sigma = 0;       // the row and unknown of sigma
   double rate[kMaxCount] = {};  // e_k times the sliding rate along component k (m/s or rad/s)
+  bool locked[kMaxCount] = {};  // the component's slip row is s_k = 0 (see above)
   double s[kMaxCount] = {};     // the friction fractions s_k
   double slip = 0.0;          // the slip speed as the slip rows read it
   double dslip_dsigma = 1.0;  // its derivative by sigma
@@ -43,6 +49,12 @@ struct FrictionRows {
 double ProjectedSlip(const NcpEvalMode& mode, double sigma, double* derivative);
 
 void AddFrictionRows(const FrictionRows& rows, const RowWriter& out);
+
+// Whether a friction component's rate reads only locked velocities (Body::locked; a fixed body's count as locked):
+// per body end e_i, the rate's derivative by its linear velocity is along v_i and by its angular velocity along w_i
+// (world frame; either may be zero), and every component of them on a free velocity is negligible.
+bool FrictionComponentLocked(const StepLayout& layout, const BodyEnd& e1, const Vec3& v1, const Vec3& w1,
+                             const BodyEnd& e2, const Vec3& v2, const Vec3& w2);
 
 // A pair's rolling moment on body 1 per newton of normal force, mu e_roll (s_q1 t + s_q2 o) (m), with the fractions
 // s_q1, s_q2 of z at PairBlock::roll() and the tangent axes t, o; zero without rolling resistance.
