@@ -1,7 +1,14 @@
 // Data, step and its report, contact results, warm starts, joint drives and applied wrenches.
+#include <signal.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
+#include "implicit_sim/core/base/format.h"
 #include "implicit_sim/core/io/step_case.h"
 #include "implicit_sim/core/model/joints.h"
 #include "implicit_sim/core/model/wrench.h"
@@ -58,8 +65,45 @@ void CheckNotStepping(const PyData& data) {
 
 // Step with the external wrench and joint efforts of this step (either may be None), the GIL released while the core
 // steps. The inputs are checked before the state is touched.
+// SIGINT while the main thread steps with the GIL released: the step is interrupted (and undone), then Python's own
+// handler, chained here, raises KeyboardInterrupt once the GIL is back. Only the main thread installs it (Python
+// delivers signals there), one step at a time.
+std::atomic<StepInterrupt*> g_sigint_interrupt{nullptr};
+struct sigaction g_python_sigint;
+
+extern "C" void OnSigintDuringStep(int signal_number) {
+  if (StepInterrupt* interrupt = g_sigint_interrupt.load()) interrupt->Request();
+  if (g_python_sigint.sa_handler != SIG_DFL && g_python_sigint.sa_handler != SIG_IGN) {
+    g_python_sigint.sa_handler(signal_number);
+  }
+}
+
+class SigintDuringStep {
+ public:
+  explicit SigintDuringStep(StepInterrupt* interrupt) {
+    const py::object threading = py::module_::import("threading");
+    if (!threading.attr("current_thread")().is(threading.attr("main_thread")())) return;
+    struct sigaction ours = {};
+    ours.sa_handler = OnSigintDuringStep;
+    sigemptyset(&ours.sa_mask);
+    g_sigint_interrupt = interrupt;
+    installed_ = sigaction(SIGINT, &ours, &g_python_sigint) == 0;
+    if (!installed_) g_sigint_interrupt = nullptr;
+  }
+  ~SigintDuringStep() {
+    if (!installed_) return;
+    sigaction(SIGINT, &g_python_sigint, nullptr);
+    g_sigint_interrupt = nullptr;
+  }
+  SigintDuringStep(const SigintDuringStep&) = delete;
+  SigintDuringStep& operator=(const SigintDuringStep&) = delete;
+
+ private:
+  bool installed_ = false;
+};
+
 StepReport StepOnce(const Model& model, const StepperOptions& options, PyState* state, PyData* data,
-                    const py::object& wrench, const py::object& joint_efforts) {
+                    const py::object& wrench, const py::object& joint_efforts, const py::object& max_wall) {
   CheckSameModel(state->model, model, "State");
   CheckSameModel(data->model, model, "Data");
   if (data->stepping.exchange(true)) throw py::value_error(kDataBusy);
@@ -81,8 +125,24 @@ StepReport StepOnce(const Model& model, const StepperOptions& options, PyState* 
     }
     wrench_W = &data->wrench_W;
   }
-  py::gil_scoped_release release;
-  return Step(model, options, &state->state, &data->data, wrench_W);
+  data->interrupt.Clear();
+  if (!max_wall.is_none()) {
+    const double seconds = max_wall.cast<double>();
+    if (!(seconds > 0.0) || !std::isfinite(seconds)) {
+      throw py::value_error("max_wall must be a finite number of seconds > 0, got " + FormatNumber(seconds));
+    }
+    data->interrupt.SetDeadline(StepInterrupt::Clock::now() + std::chrono::duration_cast<StepInterrupt::Clock::duration>(
+                                                                  std::chrono::duration<double>(seconds)));
+  }
+  data->data.interrupt = &data->interrupt;
+  StepReport report;
+  {
+    SigintDuringStep sigint(&data->interrupt);
+    py::gil_scoped_release release;
+    report = Step(model, options, &state->state, &data->data, wrench_W);
+  }
+  if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // KeyboardInterrupt (the step was undone)
+  return report;
 }
 
 void SetJointDrive(PyData* self, int joint, double position_target, double velocity_target, double stiffness,
@@ -211,10 +271,12 @@ void BindStep(py::module_& m) {
         "`warm_start` (both saved before the step), with `options`, on the scene of `urdf` loaded as `scene_name`, "
         "that reported `report`; data gives the pair selection. Without external wrench or joint efforts.");
   m.def("step", &StepOnce, py::arg("model"), py::arg("options"), py::arg("state"), py::arg("data"),
-        py::arg("wrench") = py::none(), py::arg("joint_efforts") = py::none(),
+        py::arg("wrench") = py::none(), py::arg("joint_efforts") = py::none(), py::arg("max_wall") = py::none(),
         "Advances state by one step of options.h and returns its StepReport. wrench: nv values (force N then torque "
         "N m per moving body, world frame, at the centre of mass) for this step; joint_efforts: one per joint (N m or "
-        "N). ValueError (nothing changed) for bad options, state, wrench or drives; solver trouble is reported.");
+        "N); max_wall: seconds after which the step is interrupted and undone (fault 'interrupted'). Ctrl-C (SIGINT) "
+        "on the main thread interrupts the step too, undoes it and raises KeyboardInterrupt. ValueError (nothing "
+        "changed) for bad options, state, wrench, drives or max_wall; solver trouble is reported.");
   m.def("wrench_at_point", &WrenchAtPoint, py::arg("model"), py::arg("state"), py::arg("body"), py::arg("p_WP"),
         py::arg("f_W"), py::arg("tau_W") = Eigen::Vector3d::Zero(),
         "the wrench vector (nv,) of a force f_W (N) at the world point p_WP (m) plus a torque tau_W (N m) on a moving "

@@ -35,6 +35,8 @@ struct PyData {
   Eigen::VectorXd joint_efforts;
   // Set while a step runs with the GIL released: a second thread stepping the same Data is refused.
   std::atomic<bool> stepping{false};
+  // The step's cooperative stop (Data::interrupt): step's max_wall deadline and, on the main thread, SIGINT.
+  StepInterrupt interrupt;
 };
 
 // A read-only 1-D numpy view of `values`, kept alive by `owner` (the Python object that holds them).

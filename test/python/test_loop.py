@@ -1,9 +1,14 @@
 """A step loop in Python: no memory that grows with the number of steps, and the GIL released while the core steps."""
+import os
+import signal
+import subprocess
+import sys
 import threading
 import time
 import tracemalloc
 
 import numpy as np
+import pytest
 
 import implicit_sim
 from conftest import scene
@@ -108,3 +113,58 @@ def test_a_data_being_stepped_in_another_thread_is_refused():
     assert refusals == ["this Data is being stepped in another thread: give each thread a Data of its own"] * 3
     report = implicit_sim.step(model, options, state, data)  # and it is usable again afterwards
     assert report.advanced
+
+
+def _unsolvable_p3():
+    """P3 with a tolerance no solve reaches: its first step climbs every rung and sub-step (6-7 s on the 2-core
+    machine) before it gives up; interrupting it is the point of the tests below."""
+    model = implicit_sim.load_scene(scene("p3_sphere_on_two_spheres.urdf"))
+    options = implicit_sim.StepperOptions()
+    options.newton.tolerance = 1e-300
+    return model, options, implicit_sim.State.initial(model), implicit_sim.Data(model)
+
+
+def test_max_wall_interrupts_a_long_step_and_undoes_it():
+    model, options, state, data = _unsolvable_p3()
+    before = state.copy()
+    start = time.monotonic()
+    report = implicit_sim.step(model, options, state, data, max_wall=0.2)
+    elapsed = time.monotonic() - start
+    assert report.fault == "interrupted" and not report.advanced and not report.converged
+    assert state.t == before.t
+    assert np.array_equal(state.q, before.q) and np.array_equal(state.v, before.v)
+    assert elapsed < 3.0, elapsed
+    for bad in (0.0, -1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="max_wall must be a finite number of seconds > 0"):
+            implicit_sim.step(model, options, state, data, max_wall=bad)
+
+
+def test_ctrl_c_interrupts_a_step_undoes_it_and_raises_keyboard_interrupt():
+    script = f"""
+import sys, time
+sys.path.insert(0, {os.path.dirname(os.path.dirname(implicit_sim.__file__))!r})  # the package this test imported
+import implicit_sim
+model = implicit_sim.load_scene({scene("p3_sphere_on_two_spheres.urdf")!r})
+options = implicit_sim.StepperOptions()
+options.newton.tolerance = 1e-300
+state, data = implicit_sim.State.initial(model), implicit_sim.Data(model)
+print("stepping", flush=True)
+try:
+    implicit_sim.step(model, options, state, data)
+    print("finished", flush=True)
+except KeyboardInterrupt:
+    print("KeyboardInterrupt at t =", state.t, flush=True)
+"""
+    process = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                               text=True)
+    first = process.stdout.readline().strip()
+    if first != "stepping":
+        process.kill()
+        pytest.fail("the stepping script failed:\n" + first + "\n" + process.communicate()[0])
+    time.sleep(0.5)
+    start = time.monotonic()
+    process.send_signal(signal.SIGINT)
+    output, _ = process.communicate(timeout=30)
+    elapsed = time.monotonic() - start
+    assert "KeyboardInterrupt at t = 0.0" in output, output
+    assert elapsed < 3.0, elapsed
