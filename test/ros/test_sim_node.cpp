@@ -484,6 +484,24 @@ TEST(SimNode, SigintAndSigtermShutDownCleanly) {
   }
 }
 
+// SIGINT in the middle of a long step (P3 with a tolerance no solve reaches: its first step climbs every rung and
+// sub-step, 6-7 s) interrupts the step (Data::interrupt): the node exits 0 within its 2 s grace, without abandoning
+// a step still running.
+TEST(SimNode, SigintInterruptsALongStep) {
+  int code = 0;
+  const std::string out = RunCommand(
+      SignalShutdown() + "--settle=1 INT 'contact pairs' " + NodeBinary() +
+          " __name:=signal_test_long_step _scene:=p3_sphere_on_two_spheres _scenes_dir:=" + IMPLICIT_SIM_SOURCE_DIR +
+          "/scenes _real_time_factor:=0 _tolerance:=1e-300",
+      &code);
+  int exit_code = -1, ms = -1;
+  ASSERT_EQ(std::sscanf(out.substr(out.rfind("exit=")).c_str(), "exit=%d ms=%d", &exit_code, &ms), 2) << out;
+  EXPECT_EQ(exit_code, 0) << out;
+  EXPECT_EQ(out.find("still running"), std::string::npos) << out;
+  EXPECT_LT(ms, 2000) << out;
+  RecordProperty("long_step_shutdown_ms", std::to_string(ms));
+}
+
 // A loopback TCP port that is free now, for a master of a second roslaunch's own.
 int FreePort() {
   const int fd = socket(AF_INET, SOCK_STREAM, 0);
