@@ -63,8 +63,6 @@ void CheckNotStepping(const PyData& data) {
   if (data.stepping) throw py::value_error(kDataBusy);
 }
 
-// Step with the external wrench and joint efforts of this step (either may be None), the GIL released while the core
-// steps. The inputs are checked before the state is touched.
 // SIGINT while the main thread steps with the GIL released: the step is interrupted (and undone), then Python's own
 // handler, chained here, raises KeyboardInterrupt once the GIL is back. Only the main thread installs it (Python
 // delivers signals there), one step at a time.
@@ -102,6 +100,8 @@ class SigintDuringStep {
   bool installed_ = false;
 };
 
+// Step with the external wrench and joint efforts of this step (either may be None), the GIL released while the core
+// steps, and max_wall (s, or None) as the step's deadline. The inputs are checked before the state is touched.
 StepReport StepOnce(const Model& model, const StepperOptions& options, PyState* state, PyData* data,
                     const py::object& wrench, const py::object& joint_efforts, const py::object& max_wall) {
   CheckSameModel(state->model, model, "State");
