@@ -10,8 +10,6 @@
 // --dump-worst K --dump-dir DIR writes the K hardest steps of each run as step cases (io/step_case.h) for
 // implicit_sim_replay: DIR/<scenario>_<variant>_step<NNNN>.case, NNNN the number of steps before it.
 #include <algorithm>
-#include <chrono>
-#include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -144,13 +142,8 @@ void DumpWorstSteps(const Case& c, const std::string& urdf, const std::string& s
   }
 }
 
-// Set by SIGINT and SIGTERM (a second signal kills as usual); the --max-wall deadline of the current step.
+// Requested by SIGINT and SIGTERM; due at the --max-wall deadline of the current step.
 implicit_sim::StepInterrupt g_interrupt;
-
-extern "C" void OnStopSignal(int signal_number) {
-  g_interrupt.Request();
-  std::signal(signal_number, SIG_DFL);
-}
 
 // Runs one case and prints its JSON line.
 void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const DumpRequest& dump,
@@ -181,9 +174,7 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const 
   for (long i = 0; i < steps; ++i) {
     if (dump.worst > 0) CaptureStepInputs(state, data, nullptr, &inputs);
     // The solver time left (max_wall_s less the steps so far) is the deadline of this step.
-    g_interrupt.SetDeadline(StepInterrupt::Clock::now() +
-                            std::chrono::duration_cast<StepInterrupt::Clock::duration>(
-                                std::chrono::duration<double>(std::max(0.0, max_wall_s - summary.wall_s))));
+    g_interrupt.SetDeadlineIn(std::max(0.0, max_wall_s - summary.wall_s));
     const StepReport report = Step(model, options, &state, &data);
     if (report.fault == StepFault::kInterrupted) {
       stop_reason = g_interrupt.requested() ? "interrupted" : "max_wall";
@@ -395,8 +386,7 @@ int main(int argc, char** argv) {
     std::cerr << "implicit_sim_bench: " << e.what() << "\n" << usage << "\n";
     return 2;
   }
-  std::signal(SIGINT, OnStopSignal);
-  std::signal(SIGTERM, OnStopSignal);
+  RequestOnStopSignals(&g_interrupt);
   try {
     for (const Case& c : cases) {
       Run(c, scenes_dir, max_wall_s, dump, overrides);

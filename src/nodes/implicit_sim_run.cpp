@@ -6,9 +6,7 @@
 // undone); what was written up to the last finished step stays, summary.json included.
 #include <algorithm>
 #include <charconv>
-#include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -41,14 +39,8 @@ struct Args {
   double max_wall = 0.0;           // s of wall time for the stepping; 0: no limit
 };
 
-// Set by SIGINT and SIGTERM (a second signal kills the process as usual) and by the --max-wall deadline; every step
-// watches it (Data::interrupt).
+// Requested by SIGINT and SIGTERM, due at the --max-wall deadline; every step watches it (Data::interrupt).
 implicit_sim::StepInterrupt g_interrupt;
-
-extern "C" void OnStopSignal(int signal_number) {
-  g_interrupt.Request();
-  std::signal(signal_number, SIG_DFL);
-}
 
 // Pairs closer than this (m) are measured by the separating-plane bound rather than called separated.
 constexpr double kPenetrationCheckTolerance = 1e-9;
@@ -189,13 +181,8 @@ int main(int argc, char** argv) {
     std::unique_ptr<Data> check_data;  // the check's own broad-phase workspace
     if (args.check_penetration) check_data = std::make_unique<Data>(model);
     data.interrupt = &g_interrupt;
-    if (args.max_wall > 0.0) {
-      g_interrupt.SetDeadline(StepInterrupt::Clock::now() +
-                              std::chrono::duration_cast<StepInterrupt::Clock::duration>(
-                                  std::chrono::duration<double>(args.max_wall)));
-    }
-    std::signal(SIGINT, OnStopSignal);
-    std::signal(SIGTERM, OnStopSignal);
+    if (args.max_wall > 0.0) g_interrupt.SetDeadlineIn(args.max_wall);
+    RequestOnStopSignals(&g_interrupt);
     for (long i = 0; i < steps; ++i) {
       const StepReport report = Step(model, options, &state, &data);
       if (report.fault == StepFault::kInterrupted) {

@@ -2,7 +2,6 @@
 #include <signal.h>
 
 #include <atomic>
-#include <chrono>
 #include <cmath>
 
 #include <pybind11/eigen.h>
@@ -131,8 +130,7 @@ StepReport StepOnce(const Model& model, const StepperOptions& options, PyState* 
     if (!(seconds > 0.0) || !std::isfinite(seconds)) {
       throw py::value_error("max_wall must be a finite number of seconds > 0, got " + FormatNumber(seconds));
     }
-    data->interrupt.SetDeadline(StepInterrupt::Clock::now() + std::chrono::duration_cast<StepInterrupt::Clock::duration>(
-                                                                  std::chrono::duration<double>(seconds)));
+    data->interrupt.SetDeadlineIn(seconds);
   }
   data->data.interrupt = &data->interrupt;
   StepReport report;

@@ -83,7 +83,7 @@ TEST(StepInterrupt, ADeadlineStopsALongLandingStepAndUndoesIt) {
   const Model model = LoadStepCaseModel(step_case);
   StepInterrupt interrupt;
   const auto start = InterruptClock::now();
-  interrupt.SetDeadline(start + std::chrono::milliseconds(200));
+  interrupt.SetDeadlineIn(0.2);
   State end_state;
   const StepReport report = ReplayStepCase(model, step_case, &end_state, &interrupt);
   const double seconds = SecondsSince(start);

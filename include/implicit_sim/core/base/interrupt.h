@@ -21,6 +21,10 @@ class StepInterrupt {
     deadline_ns_.store(std::chrono::duration_cast<std::chrono::nanoseconds>(deadline.time_since_epoch()).count(),
                        std::memory_order_relaxed);
   }
+  // The same, `seconds` (>= 0) from now.
+  void SetDeadlineIn(double seconds) {
+    SetDeadline(Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds)));
+  }
   void ClearDeadline() { deadline_ns_.store(kNoDeadline, std::memory_order_relaxed); }
   void Clear() {
     requested_.store(false, std::memory_order_relaxed);
@@ -44,5 +48,9 @@ class StepInterrupt {
 
 // Whether `interrupt` (may be null: never) is due.
 inline bool InterruptDue(const StepInterrupt* interrupt) { return interrupt != nullptr && interrupt->Due(); }
+
+// For a main: SIGINT and SIGTERM request `interrupt` (which must outlive the process's use of it); a second signal
+// then acts as it would without the handler (the process ends).
+void RequestOnStopSignals(StepInterrupt* interrupt);
 
 }  // namespace implicit_sim
