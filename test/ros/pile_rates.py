@@ -92,18 +92,21 @@ class PileRates(unittest.TestCase):
         self.assertGreater(len(steps), 1, "the physics never completed a step")
 
     def test_services_answer_between_steps(self):
-        """With 100 bodies and steps of 0.1-1 s, ~get_body_state answers from the snapshot at once (under 0.5 s) and a
+        """With 100 bodies and steps of 0.1-1 s, ~get_body_state answers from the snapshot at once (the median of 5 calls
+        on one connection under 0.2 s, every call under 1 s; CI runs this beside a sanitized build, so a single call
+        may lose the CPU for a while) and a
         service that changes the world (~clear_body_wrenches) waits for at most the step in progress: it answers
         within 1 s of the first step completed after the call (a new value on /clock), never a step later."""
         time.sleep(3.0)  # steps are running
         rospy.wait_for_service("/implicit_sim/get_body_state", timeout=60)
-        get = rospy.ServiceProxy("/implicit_sim/get_body_state", implicit_sim.srv.GetBodyState)
+        get = rospy.ServiceProxy("/implicit_sim/get_body_state", implicit_sim.srv.GetBodyState, persistent=True)
         clear = rospy.ServiceProxy("/implicit_sim/clear_body_wrenches", std_srvs.srv.Trigger)
         reads, writes = [], []  # (wall at the call, wall at the answer)
-        for _ in range(3):
+        for i in range(5):
             start = time.monotonic()
             self.assertTrue(get("body_0").success)
             reads.append((start, time.monotonic()))
+            if i % 2: continue  # 3 writes between the 5 reads
             start = time.monotonic()
             self.assertTrue(clear().success)
             writes.append((start, time.monotonic()))
@@ -124,7 +127,9 @@ class PileRates(unittest.TestCase):
         print("[ INFO ] pile N = %d: ~get_body_state %s s, ~clear_body_wrenches %s s, steps seen %.3f-%.3f s"
               % (rospy.get_param("~n"), [round(b - a, 3) for a, b in reads], [round(b - a, 3) for a, b in writes],
                  min(steps, default=0.0), max(steps, default=0.0)), flush=True)
-        self.assertLess(max(b - a for a, b in reads), 0.5, "~get_body_state waited: %s" % reads)
+        waits = sorted(b - a for a, b in reads)
+        self.assertLess(waits[len(waits) // 2], 0.2, "~get_body_state waited (s): %s" % waits)
+        self.assertLess(waits[-1], 1.0, "~get_body_state waited (s): %s" % waits)
         self.assertEqual(late, [], "~clear_body_wrenches answered more than 1 s after the step in progress: "
                                    "(call s, s after that step)")
 
