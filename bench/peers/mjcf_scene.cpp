@@ -98,7 +98,7 @@ std::string BodyXml(const Body& body, const std::string& contact, std::ostringst
   }
   out << "      <inertial pos=\"0 0 0\" mass=\"" << FormatNumber(body.mass) << "\" fullinertia=\""
       << Numbers({I(0, 0), I(1, 1), I(2, 2), I(0, 1), I(0, 2), I(1, 2)}) << "\"/>\n"
-      << "      " << GeomXml(body.name, body.shape, body.shape.X_BS, contact, assets) << "\n"
+      << "      " << GeomXml(body.name, body.shapes[0], body.shapes[0].X_BS, contact, assets) << "\n"
       << "    </body>\n";
   return out.str();
 }
@@ -114,9 +114,10 @@ std::string MjcfFromModel(const Model& model, const MjcfOptions& options) {
                               Numbers({friction.mu, friction.e_r * friction.mu, 0.0}) + "\"";
   std::ostringstream assets, world;
   for (const Body& body : model.bodies) {
-    if (body.shape.inequalities.empty()) continue;  // the world link
+    if (body.shapes.empty()) continue;  // the world link
+    if (body.shapes.size() > 1) throw std::invalid_argument("MJCF: body '" + body.name + "' has several shapes");
     if (body.is_fixed) {
-      world << "    " << GeomXml(body.name, body.shape, body.X_WB0 * body.shape.X_BS, contact, assets) << "\n";
+      world << "    " << GeomXml(body.name, body.shapes[0], body.X_WB0 * body.shapes[0].X_BS, contact, assets) << "\n";
     } else {
       world << BodyXml(body, contact, assets);
     }

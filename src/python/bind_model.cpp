@@ -23,18 +23,23 @@ ModelPtr LoadString(const std::string& xml, const std::string& name, const std::
 
 const Body& BodyAt(const Model& model, int body) { return model.bodies[CheckBodyIndex(model, body)]; }
 
-// The boundary of a body's shape in its body frame B: vertices (n, 3) in m and triangles (m, 3).
+// The boundary of a body's shapes in its body frame B: vertices (n, 3) in m and triangles (m, 3), one closed surface
+// per shape.
 py::tuple SurfaceMeshOfBody(const Model& model, int body, int resolution, double plane_half_size) {
   CheckBodyIndex(model, body);
-  const ConvexShape& shape = model.bodies[body].shape;
-  const SurfaceMesh mesh = MakeSurfaceMesh(shape, resolution, plane_half_size);
+  SurfaceMesh mesh;
+  for (const ConvexShape& shape : model.bodies[body].shapes) {
+    const SurfaceMesh part = MakeSurfaceMesh(shape, resolution, plane_half_size);
+    const int first = static_cast<int>(mesh.vertices.size());
+    for (const Vec3& p_S : part.vertices) mesh.vertices.push_back(shape.X_BS * p_S);
+    for (const auto& t : part.triangles) mesh.triangles.push_back({t[0] + first, t[1] + first, t[2] + first});
+  }
   py::array_t<double> vertices({static_cast<py::ssize_t>(mesh.vertices.size()), py::ssize_t{3}});
   py::array_t<int> triangles({static_cast<py::ssize_t>(mesh.triangles.size()), py::ssize_t{3}});
   auto v = vertices.mutable_unchecked<2>();
   auto t = triangles.mutable_unchecked<2>();
   for (size_t i = 0; i < mesh.vertices.size(); ++i) {
-    const Vec3 p_B = shape.X_BS * mesh.vertices[i];
-    for (int k = 0; k < 3; ++k) v(i, k) = p_B[k];
+    for (int k = 0; k < 3; ++k) v(i, k) = mesh.vertices[i][k];
   }
   for (size_t i = 0; i < mesh.triangles.size(); ++i) {
     for (int k = 0; k < 3; ++k) t(i, k) = mesh.triangles[i][k];
@@ -86,8 +91,12 @@ void BindModel(py::module_& m) {
            "kg (0 for a fixed body)")
       .def("inertia", [](const Model& model, int body) { return ToArray(BodyAt(model, body).I_B); }, py::arg("body"),
            "rotational inertia about the centre of mass in the body frame (kg m^2)")
-      .def("shape_type", [](const Model& model, int body) { return BodyAt(model, body).shape.TypeName(); },
-           py::arg("body"))
+      .def("shape_type",
+           [](const Model& model, int body) {
+             const std::vector<ConvexShape>& shapes = BodyAt(model, body).shapes;
+             return shapes.empty() ? std::string("none") : shapes.size() == 1 ? shapes[0].TypeName() : "union";
+           },
+           py::arg("body"), "the body's shape type; 'union' for several <collision>, 'none' for no collision")
       .def("joint_type", [](const Model& model, int joint) {
              return JointTypeName(model.joints[CheckJointIndex(model, joint)].type);
            },

@@ -220,14 +220,14 @@ std::vector<geometry_msgs::TransformStamped> ToStaticTransforms(const Model& mod
 
 visualization_msgs::MarkerArray ShapeMarkers(const Model& model) {
   visualization_msgs::MarkerArray out;
-  for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
-    const Body& body = model.bodies[b];
-    const ConvexShape& shape = body.shape;
+  for (int g = 0; g < static_cast<int>(model.geoms.size()); ++g) {  // one marker per shape (id: its Model::geoms index)
+    const Body& body = model.bodies[model.geoms[g].body];
+    const ConvexShape& shape = model.shape(g);
     if (shape.inequalities.empty()) continue;
     visualization_msgs::Marker m;
     m.header.frame_id = body.name;
     m.ns = "shapes";
-    m.id = b;
+    m.id = g;
     m.action = visualization_msgs::Marker::ADD;
     m.frame_locked = true;
     m.pose = ToPoseMsg(body.X_BL.inverse() * shape.X_BS);  // the shape frame in the link frame

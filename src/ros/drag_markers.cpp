@@ -13,7 +13,7 @@ constexpr double kMarkerUpdatePeriodS = 0.1;  // wall time between two pose upda
 // The handle of one body: a translucent sphere that drags in the view plane (MOVE_3D; shift drags in depth).
 visualization_msgs::InteractiveMarker DragHandle(const Model& model, int body, const Pose& X_WL,
                                                  const std::string& world_frame) {
-  const double radius = std::clamp(model.bodies[body].shape.BoundingRadius(), 0.02, 1.0);  // m
+  const double radius = std::clamp(model.BodyReach(body), 0.02, 1.0);  // m
   visualization_msgs::InteractiveMarker handle;
   handle.header.frame_id = world_frame;
   handle.name = model.bodies[body].name;

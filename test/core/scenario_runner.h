@@ -99,7 +99,7 @@ inline OracleComparison CompareClosestPointsWithOracle(const Model& model, doubl
     out.min_gap = std::min(out.min_gap, c.gap);
     if (c.gap < 1e-3) return;
     const ClosestPointsResult cp =
-        ComputeClosestPoints(m.bodies[1].shape, s.X_WB(m, 1), m.bodies[0].shape, s.X_WB(m, 0));
+        ComputeClosestPoints(m.bodies[1].shapes[0], s.X_WB(m, 1), m.bodies[0].shapes[0], s.X_WB(m, 0));
     if (!cp.solved) {
       out.worst = std::numeric_limits<double>::infinity();
       return;

@@ -23,7 +23,7 @@ inline Mat3 Rot(double angle, const Vec3& axis) {
 inline Body MovingBody(const std::string& name, const ConvexShape& shape, double mass, const Pose& X_WB) {
   Body b;
   b.name = name;
-  b.shape = shape;
+  b.shapes = {shape};
   b.mass = mass;
   double volume;
   Mat3 I_S;
@@ -37,7 +37,7 @@ inline Body FixedBody(const std::string& name, const ConvexShape& shape, const P
   Body b;
   b.name = name;
   b.is_fixed = true;
-  b.shape = shape;
+  b.shapes = {shape};
   b.X_WB0 = X_WB;
   return b;
 }

@@ -5,8 +5,10 @@
 
 namespace implicit_sim {
 
-BroadPhase::BroadPhase(std::vector<const ConvexShape*> shapes, std::function<int(int, int)> pair_index)
+BroadPhase::BroadPhase(std::vector<const ConvexShape*> shapes, std::vector<int> body_of,
+                       std::function<int(int, int)> pair_index)
     : shapes_(std::move(shapes)),
+      body_of_(std::move(body_of)),
       pair_index_(std::move(pair_index)),
       radius_(shapes_.size(), 0.0),
       centre_(shapes_.size(), Vec3::Zero()) {
@@ -25,19 +27,19 @@ BroadPhase::BroadPhase(std::vector<const ConvexShape*> shapes, std::function<int
   sweep_.reserve(bounded_.size());
 }
 
-bool BroadPhase::HalfSpaceCandidate(int plane_body, const Pose& X_SW, int other_body,
+bool BroadPhase::HalfSpaceCandidate(int plane_shape, const Pose& X_SW, int other_shape,
                                     const std::vector<double>& inflation) const {
-  const ConvexShape& plane = *shapes_[plane_body];
-  const Vec3 p_S = X_SW * centre_[other_body];
-  double signed_distance = -1e300;  // of the other body's centre from the half-space (|grad f| = 1 for a plane)
+  const ConvexShape& plane = *shapes_[plane_shape];
+  const Vec3 p_S = X_SW * centre_[other_shape];
+  double signed_distance = -1e300;  // of the other shape's centre from the half-space (|grad f| = 1 for a plane)
   for (const Inequality& inequality : plane.inequalities) signed_distance = std::max(signed_distance, inequality.Value(p_S));
-  return signed_distance <= radius_[other_body] + inflation[other_body] + inflation[plane_body];
+  return signed_distance <= radius_[other_shape] + inflation[other_shape] + inflation[plane_shape];
 }
 
 void BroadPhase::FindPairs(const std::vector<Pose>& X_WB, const std::vector<double>& inflation,
                            std::vector<int>* pairs) {
   pairs->clear();
-  for (int b : bounded_) centre_[b] = X_WB[b] * shapes_[b]->X_BS.translation();
+  for (int b : bounded_) centre_[b] = X_WB[body_of_[b]] * shapes_[b]->X_BS.translation();
   auto add = [&](int i, int j) {
     const int pair = pair_index_(i, j);
     if (pair >= 0) pairs->push_back(pair);
@@ -57,7 +59,7 @@ void BroadPhase::FindPairs(const std::vector<Pose>& X_WB, const std::vector<doub
     }
   }
   for (int plane : half_spaces_) {
-    const Pose X_SW = (X_WB[plane] * shapes_[plane]->X_BS).inverse();  // world to the plane's shape frame
+    const Pose X_SW = (X_WB[body_of_[plane]] * shapes_[plane]->X_BS).inverse();  // world to the plane's shape frame
     for (int b : bounded_) {
       if (HalfSpaceCandidate(plane, X_SW, b, inflation)) add(plane, b);
     }
@@ -65,7 +67,7 @@ void BroadPhase::FindPairs(const std::vector<Pose>& X_WB, const std::vector<doub
       if (other > plane) add(plane, other);
     }
   }
-  for (int u : other_unbounded_) {  // with every other body (a pair of two such bodies is added twice, then deduplicated)
+  for (int u : other_unbounded_) {  // with every other shape (a pair of two such shapes is added twice, then deduplicated)
     for (int b = 0; b < static_cast<int>(shapes_.size()); ++b) add(u, b);
   }
   std::sort(pairs->begin(), pairs->end());

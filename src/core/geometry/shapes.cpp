@@ -175,6 +175,71 @@ void ConvexShape::UnitDensityMassProperties(double* volume, Mat3* inertia_S) con
   *inertia_S = Vec3(m2[1] + m2[2], m2[0] + m2[2], m2[0] + m2[1]).asDiagonal();
 }
 
+namespace {
+
+// Volume, first moment (m^4) and second moment integral of x x^T dV (m^5) of a convex polytope given by half-spaces
+// and its corners, about the origin of S: each face is a fan of triangles over its corners (taken in angle order
+// about the face's mean corner), and each triangle with the reference point `o` spans a tetrahedron (the divergence
+// theorem); for a tetrahedron o, p1, p2, p3 with q_i = p_i - o and signed volume V = det[q1 q2 q3] / 6, the
+// second moment about o is V / 20 (sum q_i q_i^T + s s^T), s = q1 + q2 + q3.
+void PolytopeMoments(const ConvexShape& shape, double* volume, Vec3* first, Mat3* second) {
+  const std::vector<Vec3>& corners = shape.vertices;
+  Vec3 o = Vec3::Zero();
+  double extent = 0.0;
+  for (const Vec3& v : corners) o += v / static_cast<double>(corners.size());
+  for (const Vec3& v : corners) extent = std::max(extent, (v - o).norm());
+  const double on_face = 1e-9 * extent;  // corners are intersections of the faces' planes: on them to round-off
+  *volume = 0.0;
+  Vec3 m1 = Vec3::Zero();  // about o
+  Mat3 m2 = Mat3::Zero();
+  std::vector<std::pair<double, int>> ring;
+  for (const Inequality& face : shape.inequalities) {
+    const Vec3 n = face.X_SP.linear() * face.normal;  // unit normal and offset in S
+    const double offset = face.offset + n.dot(face.X_SP.translation());
+    ring.clear();
+    Vec3 centre = Vec3::Zero();
+    for (int i = 0; i < static_cast<int>(corners.size()); ++i) {
+      if (std::abs(n.dot(corners[i]) - offset) <= on_face) {
+        ring.emplace_back(0.0, i);
+        centre += corners[i];
+      }
+    }
+    if (ring.size() < 3) continue;  // an edge or a corner: no area
+    centre /= static_cast<double>(ring.size());
+    const Vec3 u = n.unitOrthogonal(), w = n.cross(u);
+    for (auto& [angle, i] : ring) angle = std::atan2((corners[i] - centre).dot(w), (corners[i] - centre).dot(u));
+    std::sort(ring.begin(), ring.end());  // counter-clockwise seen from outside (along n)
+    for (size_t k = 1; k + 1 < ring.size(); ++k) {
+      const Vec3 q1 = corners[ring[0].second] - o, q2 = corners[ring[k].second] - o, q3 = corners[ring[k + 1].second] - o;
+      const double V = q1.dot(q2.cross(q3)) / 6.0;
+      const Vec3 sum = q1 + q2 + q3;
+      *volume += V;
+      m1 += V * sum / 4.0;
+      m2 += V / 20.0 * (q1 * q1.transpose() + q2 * q2.transpose() + q3 * q3.transpose() + sum * sum.transpose());
+    }
+  }
+  // Back to the origin of S: x = o + y.
+  *first = m1 + *volume * o;
+  *second = m2 + m1 * o.transpose() + o * m1.transpose() + *volume * o * o.transpose();
+}
+
+}  // namespace
+
+void ConvexShape::UnitDensityMassProperties(double* volume, Vec3* centroid_S, Mat3* inertia_S) const {
+  if (type != ShapeType::kIntersection || vertices.size() < 4) {
+    *centroid_S = Vec3::Zero();
+    UnitDensityMassProperties(volume, inertia_S);
+    return;
+  }
+  Vec3 first;
+  Mat3 second;
+  PolytopeMoments(*this, volume, &first, &second);
+  if (!(*volume > 0.0)) throw std::invalid_argument("a polytope of zero volume has no inertia");
+  *centroid_S = first / *volume;
+  const Mat3 about_centroid = second - *volume * *centroid_S * centroid_S->transpose();  // integral y y^T dV
+  *inertia_S = about_centroid.trace() * Mat3::Identity() - about_centroid;
+}
+
 std::string ConvexShape::TypeName() const {
   switch (type) {
     case ShapeType::kHalfSpace: return "halfspace";

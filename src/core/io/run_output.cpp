@@ -117,8 +117,8 @@ void TrajectoryWriter::WriteInitial(const State& state) {
   for (size_t c = 0; pair_columns_ && c < model_.pairs.size(); ++c) {
     const ContactPair& pair = model_.pairs[c];
     const ClosestPointsResult cp =
-        FindClosestPoints(model_.bodies[pair.body1].shape, state.X_WB(model_, pair.body1),
-                          model_.bodies[pair.body2].shape, state.X_WB(model_, pair.body2));
+        FindClosestPoints(model_.shape(pair.geom1), state.X_WB(model_, pair.body1), model_.shape(pair.geom2),
+                          state.X_WB(model_, pair.body2));
     out_ << ',' << FormatNumber(cp.solved ? cp.distance : std::nan("")) << ",nan,nan,nan,nan";
   }
   out_ << ",0,0,1";

@@ -128,7 +128,8 @@ bool CheckJointDrive(const Joint& joint, const JointDrive& drive, std::string* e
   } else if (JointDriveActive(drive) && !joint.has_coordinate()) {
     problem = "a fixed joint cannot be driven";
   } else if (JointDriveActive(drive) && joint.limited &&
-             !(drive.position_target >= joint.lower && drive.position_target <= joint.upper)) {
+             !(drive.position_target >= joint.lower - kJointLimitRoundOff &&
+               drive.position_target <= joint.upper + kJointLimitRoundOff)) {
     problem = "position target outside the joint limits [" + std::to_string(joint.lower) + ", " +
               std::to_string(joint.upper) + "]";
   }

@@ -1,5 +1,6 @@
 #include "loader_util.h"
 
+#include <algorithm>
 #include <cmath>
 #include <locale>
 #include <sstream>
@@ -77,6 +78,15 @@ void CheckAttributes(const tinyxml2::XMLElement* e, const std::vector<std::strin
       list += (list.empty() ? "" : ", ") + name;
     }
     if (!known) Fail(where + ": unknown attribute '" + a->Name() + "' (allowed: " + list + ")");
+  }
+}
+
+void NoteUnknownAttributes(const tinyxml2::XMLElement* e, const std::vector<std::string>& allowed, LoadNotes* notes) {
+  for (const tinyxml2::XMLAttribute* a = e->FirstAttribute(); a; a = a->Next()) {
+    if (std::find(allowed.begin(), allowed.end(), a->Name()) != allowed.end()) continue;
+    const std::string tag = e->Name();
+    notes->Add(tag + "/" + a->Name(), "implicit_sim: attribute '" + std::string(a->Name()) + "' of <" + tag +
+                                          "> is not a URDF attribute the simulator reads; ignored wherever it occurs");
   }
 }
 

@@ -2,6 +2,7 @@
 // the classic "C" locale and failing with a message that names the element and attribute. Internal to the core.
 #pragma once
 
+#include <set>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,23 @@ void CheckNumbers(const tinyxml2::XMLElement* e, const char* name, const std::st
 // Refuses any attribute of `e` not in `allowed`: a misspelt or misplaced attribute would otherwise be ignored.
 void CheckAttributes(const tinyxml2::XMLElement* e, const std::vector<std::string>& allowed, const std::string& where);
 Pose ToPose(const urdf::Pose& p);
+
+// What one load tells the user without refusing anything (vendor attributes ignored, mass properties taken from
+// geometry, mesh hulls), each note once.
+class LoadNotes {
+ public:
+  void Add(const std::string& key, const std::string& text) {
+    if (keys_.insert(key).second) lines_.push_back(text);
+  }
+  const std::vector<std::string>& lines() const { return lines_; }
+
+ private:
+  std::set<std::string> keys_;
+  std::vector<std::string> lines_;
+};
+// Stock URDF elements tolerate attributes of other tools (franka's <dynamics D K ...>), as urdfdom does: each
+// attribute of `e` not in `allowed` gets one note per element tag and attribute name, and is ignored.
+void NoteUnknownAttributes(const tinyxml2::XMLElement* e, const std::vector<std::string>& allowed, LoadNotes* notes);
 
 }  // namespace loader
 }  // namespace implicit_sim

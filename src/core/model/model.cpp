@@ -36,20 +36,46 @@ const char* JointTypeName(JointType type) {
   return "unknown";
 }
 
-int Model::PairIndex(int i, int j) const {
-  if (i == j || i < 0 || j < 0 || i >= static_cast<int>(bodies.size()) || j >= static_cast<int>(bodies.size())) {
+int Model::GeomPairIndex(int i, int j) const {
+  if (i == j || i < 0 || j < 0 || i >= static_cast<int>(geoms.size()) || j >= static_cast<int>(geoms.size())) {
     return -1;
   }
   const int lo = std::min(i, j), hi = std::max(i, j);
   const auto begin = pairs.begin() + pairs_of_lower[lo], end = pairs.begin() + pairs_of_lower[lo + 1];
-  const auto it = std::lower_bound(begin, end, hi, [](const ContactPair& pair, int body) {
-    return std::max(pair.body1, pair.body2) < body;
+  const auto it = std::lower_bound(begin, end, hi, [](const ContactPair& pair, int geom) {
+    return std::max(pair.geom1, pair.geom2) < geom;
   });
-  return it != end && std::max(it->body1, it->body2) == hi ? static_cast<int>(it - pairs.begin()) : -1;
+  return it != end && std::max(it->geom1, it->geom2) == hi ? static_cast<int>(it - pairs.begin()) : -1;
 }
 
-std::string Model::PairName(int pair) const {
-  return bodies[pairs[pair].body1].name + "-" + bodies[pairs[pair].body2].name;
+int Model::PairIndex(int i, int j) const {
+  if (i == j || i < 0 || j < 0 || i >= static_cast<int>(bodies.size()) || j >= static_cast<int>(bodies.size())) {
+    return -1;
+  }
+  for (int gi = 0; gi < static_cast<int>(geoms.size()); ++gi) {  // geoms are ordered by body
+    if (geoms[gi].body != std::min(i, j)) continue;
+    for (int gj = gi + 1; gj < static_cast<int>(geoms.size()); ++gj) {
+      if (geoms[gj].body != std::max(i, j)) continue;
+      const int pair = GeomPairIndex(gi, gj);
+      if (pair >= 0) return pair;
+    }
+  }
+  return -1;
+}
+
+std::string Model::GeomName(int geom) const {
+  const Body& body = bodies[geoms[geom].body];
+  return body.shapes.size() == 1 ? body.name : body.name + "#" + std::to_string(geoms[geom].index);
+}
+
+std::string Model::PairName(int pair) const { return GeomName(pairs[pair].geom1) + "-" + GeomName(pairs[pair].geom2); }
+
+double Model::BodyReach(int body) const {
+  double reach = 0.0;
+  for (const ConvexShape& shape : bodies[body].shapes) {
+    reach = std::max(reach, shape.X_BS.translation().norm() + shape.BoundingRadius());
+  }
+  return reach;
 }
 
 double Model::ForceScale() const {
@@ -64,8 +90,12 @@ double Model::ForceScale() const {
 
 BroadPhase MakeBroadPhase(const Model& model) {
   std::vector<const ConvexShape*> shapes;
-  for (const Body& body : model.bodies) shapes.push_back(&body.shape);
-  return BroadPhase(std::move(shapes), [&model](int i, int j) { return model.PairIndex(i, j); });
+  std::vector<int> body_of;
+  for (int g = 0; g < static_cast<int>(model.geoms.size()); ++g) {
+    shapes.push_back(&model.shape(g));
+    body_of.push_back(model.geoms[g].body);
+  }
+  return BroadPhase(std::move(shapes), std::move(body_of), [&model](int i, int j) { return model.GeomPairIndex(i, j); });
 }
 
 }  // namespace implicit_sim

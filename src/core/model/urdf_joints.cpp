@@ -46,7 +46,7 @@ int Depth(const urdf::Link& link) {
 
 }  // namespace
 
-void CheckJointElement(const tinyxml2::XMLElement* j, const std::string& where) {
+void CheckJointElement(const tinyxml2::XMLElement* j, const std::string& where, LoadNotes* notes) {
   const char* type_text = j->Attribute("type");
   const std::string type = type_text ? type_text : "";
   static const std::vector<std::string> kTypes = {"floating", "fixed", "revolute", "continuous", "prismatic"};
@@ -54,7 +54,8 @@ void CheckJointElement(const tinyxml2::XMLElement* j, const std::string& where) 
     Fail(where + ": type '" + type + "' is not supported (allowed: floating, fixed, revolute, continuous, prismatic)");
   }
   if (j->FirstChildElement("mimic")) Fail(where + ": <mimic> is not supported");
-  if (const tinyxml2::XMLElement* axis = j->FirstChildElement("axis")) {
+  const tinyxml2::XMLElement* axis = j->FirstChildElement("axis");
+  if (axis && type != "fixed" && type != "floating") {
     CheckAttributes(axis, {"xyz"}, where + " <axis>");
     CheckNumbers(axis, "xyz", where + " <axis>", 3, false);
     if (ReadVec3(axis, "xyz", where + " <axis>", Vec3::Zero()).norm() < 1e-9) {
@@ -67,7 +68,7 @@ void CheckJointElement(const tinyxml2::XMLElement* j, const std::string& where) 
   }
   if (limit) {
     const std::string at = where + " <limit>";
-    CheckAttributes(limit, {"lower", "upper", "effort", "velocity"}, at);
+    NoteUnknownAttributes(limit, {"lower", "upper", "effort", "velocity"}, notes);
     for (const char* name : {"effort", "velocity"}) CheckNumbers(limit, name, at, 1, false);  // urdfdom needs both
     for (const char* name : {"lower", "upper"}) {
       if (limit->Attribute(name)) CheckNumbers(limit, name, at, 1, false);
@@ -75,7 +76,7 @@ void CheckJointElement(const tinyxml2::XMLElement* j, const std::string& where) 
   }
   if (const tinyxml2::XMLElement* dynamics = j->FirstChildElement("dynamics")) {
     const std::string at = where + " <dynamics>";
-    CheckAttributes(dynamics, {"damping", "friction"}, at);
+    NoteUnknownAttributes(dynamics, {"damping", "friction"}, notes);
     for (const char* name : {"damping", "friction"}) {
       if (dynamics->Attribute(name)) CheckNumbers(dynamics, name, at, 1, false);
     }
@@ -130,7 +131,7 @@ Pose InitialLinkPose(const urdf::Link& link, const JointStarts& starts, const Ro
 namespace {
 
 // Joint parameters from urdfdom's joint (whose numbers CheckJointElement found finite), with their ranges.
-void ReadJointParameters(const urdf::Joint& u, const JointStarts& starts, Joint* joint) {
+void ReadJointParameters(const urdf::Joint& u, const JointStarts& starts, Joint* joint, LoadNotes* notes) {
   const std::string where = JointWhere(u);
   if (u.limits) {
     if (!(u.limits->effort >= 0.0)) Fail(where + " <limit> attribute 'effort' must be >= 0 (0: no clamp)");
@@ -145,7 +146,10 @@ void ReadJointParameters(const urdf::Joint& u, const JointStarts& starts, Joint*
            FormatNumber(joint->upper));
     }
     if (u.type == urdf::Joint::REVOLUTE && !(joint->upper - joint->lower < 2.0 * kPi - 1e-9)) {
-      Fail(where + " <limit>: 'upper' - 'lower' must be < 2 pi rad (use a continuous joint for a wider range)");
+      joint->limited = false;  // the limits stay in lower and upper for start positions and drive targets
+      notes->Add("wide_revolute", "implicit_sim: revolute joints with a range of 2 pi rad or more (the first: " +
+                                      where + ", [" + FormatNumber(joint->lower) + ", " + FormatNumber(joint->upper) +
+                                      "] rad) turn without limit rows: within one turn neither limit is reached");
     }
   }
   if (u.dynamics) {
@@ -217,7 +221,7 @@ std::string NearestBodyLink(const urdf::ModelInterface& urdf, const Model& model
 }  // namespace
 
 void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, const RootPlacement& root,
-                 Model* model) {
+                 Model* model, LoadNotes* notes) {
   std::vector<urdf::JointSharedPtr> ordered;
   for (const auto& [name, joint] : urdf.joints_) ordered.push_back(joint);
   // Parents before children: by depth below 'world', then by name (a strict total order: no stable sort needed).
@@ -250,7 +254,7 @@ void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, co
     const std::string parent_link = NearestBodyLink(urdf, *model, u->parent_link_name, &X_AL);
     joint.parent = world_parent ? -1 : model->FindBody(parent_link);
     joint.child = child_index;
-    ReadJointParameters(*u, starts, &joint);
+    ReadJointParameters(*u, starts, &joint, notes);
     const Vec3 a = joint.type == JointType::kFixed ? Vec3::UnitX() : UnitAxis(*u);
     const Pose X_AJ = X_AL * ToPose(u->parent_to_joint_origin_transform);  // in the parent body's link frame
     const Pose X_PA = joint.parent < 0 ? Pose::Identity() : model->bodies[joint.parent].X_BL;

@@ -9,13 +9,15 @@
 #include <urdf_model/model.h>
 
 #include "implicit_sim/core/model/model.h"
+#include "loader_util.h"
 
 namespace implicit_sim {
 namespace loader {
 
 // Refuses an unsupported type or a malformed <axis>, <limit> or <dynamics> (naming the joint and attribute), so that
-// urdfdom never refuses one with a message that names nothing.
-void CheckJointElement(const tinyxml2::XMLElement* joint, const std::string& where);
+// urdfdom never refuses one with a message that names nothing. Attributes of other tools on <limit> and <dynamics>
+// are noted and ignored; the <axis> of a fixed or floating joint is ignored, as urdfdom ignores it.
+void CheckJointElement(const tinyxml2::XMLElement* joint, const std::string& where, LoadNotes* notes);
 
 // Initial joint position (rad or m) and velocity (rad/s or m/s) and a constant effort, from
 // <implicit_sim><joint name position velocity effort/>.
@@ -46,7 +48,10 @@ Pose InitialLinkPose(const urdf::Link& link, const JointStarts& starts, const Ro
 // joint whose child moves, and gives each jointed child its initial velocity from its parent's and the joint's.
 // Frame links (IsFrameLink) are skipped. The bodies must be loaded (poses, body settings) and model->joints must be
 // empty; call before Model::Finalize.
-void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, const RootPlacement& root, Model* model);
+// A revolute joint whose range is 2 pi or wider keeps no limit rows (its angle is measured in one turn, where such a
+// limit is never reached from one side): one note in `notes`.
+void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, const RootPlacement& root, Model* model,
+                 LoadNotes* notes);
 
 }  // namespace loader
 }  // namespace implicit_sim

@@ -26,6 +26,9 @@ namespace {
 
 // Larger scene files are refused before parsing (bytes): 32 MiB holds about 60000 S1 pile bodies.
 constexpr size_t kMaxSceneBytes = size_t{32} << 20;
+// Density of the shapes without <implicit mass> of a moving link without <inertial> (kg/m^3): water, as MuJoCo's
+// default.
+constexpr double kDefaultDensity = 1000.0;
 
 Pose ReadOrigin(const tinyxml2::XMLElement* e, const std::string& where) {
   const Vec3 xyz = ReadVec3(e, "xyz", where, Vec3::Zero());
@@ -74,8 +77,7 @@ Inequality ReadPart(const tinyxml2::XMLElement* part, const std::string& where) 
 // The implicit shape of a link from its <implicit> element or, without one, from the stock geometry (a mesh: its
 // convex hull, with one warning).
 ConvexShape ReadShape(const std::string& link, const urdf::Collision& collision,
-                      const tinyxml2::XMLElement* implicit, const LoaderOptions& options,
-                      std::vector<std::string>* warnings) {
+                      const tinyxml2::XMLElement* implicit, const LoaderOptions& options, LoadNotes* notes) {
   const std::string where = "link '" + link + "' <implicit>";
   if (!implicit) {
     const urdf::Geometry* g = collision.geometry.get();
@@ -94,7 +96,7 @@ ConvexShape ReadShape(const std::string& link, const urdf::Collision& collision,
     std::string warning;
     ConvexShape hull =
         MeshHullShape(link, mesh->filename, Vec3(mesh->scale.x, mesh->scale.y, mesh->scale.z), options, &warning);
-    warnings->push_back(warning);
+    notes->Add("mesh/" + link + "/" + mesh->filename, warning);
     return hull;
   }
   const char* type_text = implicit->Attribute("type");
@@ -338,10 +340,20 @@ void CheckInertia(const Mat3& I_B, const std::string& where) {
   }
 }
 
+// One <collision> of a link: its shape (X_BS still the shape frame in the collision frame C), the collision frame in
+// the link frame L, and its <implicit> element (null for stock geometry).
+struct LinkShape {
+  ConvexShape shape;
+  Pose X_LC = Pose::Identity();
+  const tinyxml2::XMLElement* implicit = nullptr;
+};
+
 // Mass, inertia and the body frame (centre of mass) of a moving link. Every value is finite here
-// (CheckUrdfStructure and ReadShape checked them).
-void ReadInertia(const urdf::Link& link, const tinyxml2::XMLElement* implicit, const Pose& X_LC, Body* body,
-                 Pose* X_LB) {
+// (CheckUrdfStructure and ReadShape checked them). Without <inertial>, from the union of its shapes (taken as
+// disjoint): each of mass <implicit mass> or else of density kDefaultDensity (then the link is named in
+// *from_density); B's origin is the union's centre of mass, its axes the link's.
+void ReadInertia(const urdf::Link& link, const std::vector<LinkShape>& shapes, Body* body, Pose* X_LB,
+                 std::vector<std::string>* from_density) {
   const std::string where = "link '" + body->name + "'";
   if (link.inertial) {
     const urdf::Inertial& in = *link.inertial;
@@ -356,20 +368,41 @@ void ReadInertia(const urdf::Link& link, const tinyxml2::XMLElement* implicit, c
     CheckInertia(I, where + " <inertial> <inertia>");
     return;
   }
-  const double mass = ReadScalar(implicit, "mass", where + " <implicit>", 0.0, 1e9, true, 0.0, false);
-  if (mass == 0.0) Fail(where + ": a moving link needs <inertial> or a 'mass' attribute on <implicit>");
-  double volume;  // m^3
-  Mat3 I_S;       // m^5, unit density
-  try {
-    body->shape.UnitDensityMassProperties(&volume, &I_S);
-  } catch (const std::invalid_argument& e) {
-    Fail(where + " <implicit> attribute 'mass': " + e.what() + "; give an <inertial> instead");
+  if (shapes.empty()) Fail(where + ": a moving link needs <inertial> or a <collision> to take its mass from");
+  double mass = 0.0;          // kg
+  Vec3 moment = Vec3::Zero();  // kg m, about L's origin
+  Mat3 I_L = Mat3::Zero();     // kg m^2: the shapes' own inertias about their centroids, L's axes
+  std::vector<std::pair<double, Vec3>> parts;  // (mass, centroid in L)
+  bool density_used = false;
+  for (const LinkShape& s : shapes) {
+    double volume;  // m^3
+    Vec3 c_S;       // centroid in S (m)
+    Mat3 J_S;       // m^5, unit density, about the centroid
+    try {
+      s.shape.UnitDensityMassProperties(&volume, &c_S, &J_S);
+    } catch (const std::invalid_argument& e) {
+      Fail(where + ": its mass properties cannot come from its shapes (" + e.what() + "); give an <inertial>");
+    }
+    const double given = ReadScalar(s.implicit, "mass", where + " <implicit>", 0.0, 1e9, true, 0.0, false);
+    density_used = density_used || given == 0.0;
+    const double density = given > 0.0 ? given / volume : kDefaultDensity;  // kg/m^3
+    const Pose X_LS = s.X_LC * s.shape.X_BS;
+    parts.emplace_back(density * volume, X_LS * c_S);
+    mass += parts.back().first;
+    moment += parts.back().first * parts.back().second;
+    I_L += density * X_LS.linear() * J_S * X_LS.linear().transpose();
   }
+  const Vec3 c_L = moment / mass;  // the union's centre of mass
+  for (const auto& [m, c] : parts) {
+    const Vec3 d = c - c_L;
+    I_L += m * (d.squaredNorm() * Mat3::Identity() - d * d.transpose());  // parallel axes
+  }
+  if (density_used) from_density->push_back(body->name);
   body->mass = mass;
   *X_LB = Pose::Identity();
-  X_LB->translation() = X_LC.translation();   // the centre of a primitive is its collision origin
-  body->I_B = X_LC.linear() * I_S * (mass / volume) * X_LC.linear().transpose();
-  CheckInertia(body->I_B, where + " <implicit> (inertia from 'mass' and the shape)");
+  X_LB->translation() = c_L;
+  body->I_B = I_L;
+  CheckInertia(body->I_B, where + " (inertia from its collision shapes)");
 }
 
 void CheckLoaderOptions(const LoaderOptions& options) {
@@ -415,10 +448,11 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
   }
   const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
   if (!robot) Fail(scene + ": no <robot> element");
+  LoadNotes notes;
   // Joints first: urdfdom refuses a revolute joint without <limit> with a message that names nothing.
   for (auto* j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
     const char* name = j->Attribute("name");
-    CheckJointElement(j, "joint '" + std::string(name ? name : "") + "'");
+    CheckJointElement(j, "joint '" + std::string(name ? name : "") + "'", &notes);
   }
   CheckUrdfStructure(robot, scene_name);
   const urdf::ModelInterfaceSharedPtr urdf_model = ParseWithUrdfdom(xml, scene_name);
@@ -435,7 +469,7 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
   }
   const JointStarts joint_starts = ReadJointStarts(sim, *urdf_model);
 
-  std::vector<std::string> warnings;
+  std::vector<std::string> from_density;  // moving links whose mass came (in part) from kDefaultDensity
   std::vector<urdf::LinkSharedPtr> links;
   urdf_model->getLinks(links);
   std::map<std::string, urdf::LinkSharedPtr> by_name;
@@ -454,24 +488,27 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
     if (!link->parent_joint && name != root) {
       Fail("link '" + name + "': no joint joins it to the tree under '" + root + "'");
     }
-    if (link->collision_array.size() > 1) {
-      Fail("link '" + name + "': one <collision> per link (a body is one convex shape)");
-    }
-    const tinyxml2::XMLElement* collision_xml = e->FirstChildElement("collision");
     Body body;
     body.name = name;
     body.is_fixed = IsWeldedToWorld(*link, placement);
     if (!body.is_fixed && IsFrameLink(*link)) continue;  // a frame on a moving link: no body
-    const tinyxml2::XMLElement* implicit = collision_xml ? collision_xml->FirstChildElement("implicit") : nullptr;
-    Pose X_LC = Pose::Identity();
-    if (link->collision) {
-      X_LC = ToPose(link->collision->origin);
-      body.shape = ReadShape(name, *link->collision, implicit, options, &warnings);
+    std::vector<LinkShape> shapes;  // urdfdom keeps the <collision> elements in document order
+    const tinyxml2::XMLElement* collision_xml = e->FirstChildElement("collision");
+    for (const urdf::CollisionSharedPtr& collision : link->collision_array) {
+      LinkShape s;
+      s.implicit = collision_xml->FirstChildElement("implicit");
+      s.X_LC = ToPose(collision->origin);
+      s.shape = ReadShape(name, *collision, s.implicit, options, &notes);
+      shapes.push_back(s);
+      collision_xml = collision_xml->NextSiblingElement("collision");
     }
     Pose X_LB = Pose::Identity();
-    if (!body.is_fixed) ReadInertia(*link, implicit, X_LC, &body, &X_LB);
+    if (!body.is_fixed) ReadInertia(*link, shapes, &body, &X_LB, &from_density);
     body.X_BL = X_LB.inverse();
-    body.shape.X_BS = body.X_BL * X_LC * body.shape.X_BS;  // a mesh hull's S is off its collision frame
+    for (LinkShape& s : shapes) {
+      s.shape.X_BS = body.X_BL * s.X_LC * s.shape.X_BS;  // a mesh hull's S is off its collision frame
+      body.shapes.push_back(std::move(s.shape));
+    }
     body.X_WB0 = InitialLinkPose(*link, joint_starts, placement) * X_LB;
     model.bodies.push_back(body);
   }
@@ -505,7 +542,7 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
       }
     }
   }
-  BuildJoints(*urdf_model, joint_starts, placement, &model);
+  BuildJoints(*urdf_model, joint_starts, placement, &model, &notes);
   model.Finalize([&](int i, int j) {
     for (const auto& key : {std::make_pair(model.bodies[i].name, model.bodies[j].name),
                             std::make_pair(model.bodies[j].name, model.bodies[i].name)}) {
@@ -515,7 +552,14 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
     return default_friction;
   });
   if (model.moving_bodies.empty()) Fail("scene '" + scene_name + "': no moving body (use a 'floating' joint)");
-  for (const std::string& warning : warnings) {
+  if (!from_density.empty()) {
+    std::string names;
+    for (const std::string& link : from_density) names += (names.empty() ? "'" : ", '") + link + "'";
+    notes.Add("density", "implicit_sim: " + std::to_string(from_density.size()) +
+                             " moving links without <inertial> take their mass and inertia from their collision shapes "
+                             "at " + FormatNumber(kDefaultDensity) + " kg/m^3: " + names);
+  }
+  for (const std::string& warning : notes.lines()) {
     if (options.warnings) {
       options.warnings->push_back(warning);
     } else {

@@ -33,7 +33,7 @@ Data::Data(const Model& model, PairSelection selection)
       velocity_reversals(model.num_moving(), 0),
       broad(MakeBroadPhase(model)),
       X_WB(model.bodies.size(), Pose::Identity()),
-      inflation(model.bodies.size(), 0.0),
+      inflation(model.geoms.size(), 0.0),
       driven(model.joints.size(), 0),
       joint_drives(model.joints.size()),
       contacts(layout.blocks().size()),

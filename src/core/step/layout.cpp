@@ -88,8 +88,8 @@ void StepLayout::SetActivePairs(const std::vector<int>& pairs, const Eigen::Vect
     PairBlock block;
     block.pair = pair;
     block.offset = size_;
-    block.k1 = static_cast<int>(model_.bodies[model_.pairs[pair].body1].shape.inequalities.size());
-    block.k2 = static_cast<int>(model_.bodies[model_.pairs[pair].body2].shape.inequalities.size());
+    block.k1 = static_cast<int>(model_.shape(model_.pairs[pair].geom1).inequalities.size());
+    block.k2 = static_cast<int>(model_.shape(model_.pairs[pair].geom2).inequalities.size());
     block.rolling = model_.pairs[pair].friction.e_roll > 0.0 ? 2 : 0;
     block.body1 = LocalBody(model_.pairs[pair].body1);
     block.body2 = LocalBody(model_.pairs[pair].body2);

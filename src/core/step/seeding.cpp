@@ -24,11 +24,11 @@ void SeedPair(const Model& model, const State& state, int c, const StepLayout& l
               Eigen::VectorXd* z, bool use_oracle) {
   const PairBlock& blk = layout.blocks()[c];
   const ContactPair& pair = model.pairs[blk.pair];
-  const Body& body1 = model.bodies[pair.body1];
-  const Body& body2 = model.bodies[pair.body2];
+  const ConvexShape& shape1 = model.shape(pair.geom1);
+  const ConvexShape& shape2 = model.shape(pair.geom2);
   const Pose X_WB1 = state.X_WB(model, pair.body1), X_WB2 = state.X_WB(model, pair.body2);
-  const ClosestPointsResult cp = use_oracle ? FindClosestPoints(body1.shape, X_WB1, body2.shape, X_WB2)
-                                            : QuickClosestPoints(body1.shape, X_WB1, body2.shape, X_WB2);
+  const ClosestPointsResult cp = use_oracle ? FindClosestPoints(shape1, X_WB1, shape2, X_WB2)
+                                            : QuickClosestPoints(shape1, X_WB1, shape2, X_WB2);
   Vec3 p1 = cp.p_W1, p2 = cp.p_W2;
   if (!cp.solved || !p1.allFinite() || !p2.allFinite()) {  // fall back to the body origins
     p1 = X_WB1.translation();
@@ -36,7 +36,7 @@ void SeedPair(const Model& model, const State& state, int c, const StepLayout& l
   }
   Vec3 n;
   double grad2 = 1.0;
-  MostActiveInequality(body2.shape, X_WB2, p2, &n, &grad2);
+  MostActiveInequality(shape2, X_WB2, p2, &n, &grad2);
   if (cp.distance > 1e-9) n = (p1 - p2).normalized();  // separated: along the closest points
   z->segment(blk.offset, blk.size()).setZero();
   z->segment<3>(blk.offset + pair_index::kA1) = p1;
@@ -44,8 +44,8 @@ void SeedPair(const Model& model, const State& state, int c, const StepLayout& l
   z->segment<3>(blk.offset + pair_index::kN) = n;
   (*z)[blk.offset + pair_index::kD] = n.dot(p1 - p2);
   // -n = sum alpha grad f(a1), n = sum beta grad g(a2): every active inequality's multiplier (edges, corners, rims).
-  SeedNormalConeMultipliers(body1.shape, X_WB1, p1, -n, z->data() + blk.offset + pair_index::kAlpha);
-  SeedNormalConeMultipliers(body2.shape, X_WB2, p2, n, z->data() + blk.beta());
+  SeedNormalConeMultipliers(shape1, X_WB1, p1, -n, z->data() + blk.offset + pair_index::kAlpha);
+  SeedNormalConeMultipliers(shape2, X_WB2, p2, n, z->data() + blk.beta());
   (*z)[blk.normal_force()] = cp.distance < 1e-6 ? 0.5 * force_scale : 0.0;
 }
 

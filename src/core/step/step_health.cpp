@@ -14,10 +14,8 @@ namespace {
 
 // The broad phase's candidate pairs of `state` (bounding volumes without inflation) into data->candidates.
 void FindCandidates(const Model& model, const State& state, Data* data) {
-  for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
-    data->X_WB[b] = state.X_WB(model, b);
-    data->inflation[b] = 0.0;
-  }
+  for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) data->X_WB[b] = state.X_WB(model, b);
+  std::fill(data->inflation.begin(), data->inflation.end(), 0.0);
   data->broad.FindPairs(data->X_WB, data->inflation, &data->candidates);
 }
 
@@ -50,8 +48,8 @@ double OracleCrossing(const ConvexShape& shape1, const Pose& X_WB1, const Convex
 
 // The geometric penetration bound of one pair (see MaxPenetrationBound), m.
 double PairPenetrationBound(const Model& model, const State& state, const ContactPair& pair, double tolerance) {
-  const ConvexShape& shape1 = model.bodies[pair.body1].shape;
-  const ConvexShape& shape2 = model.bodies[pair.body2].shape;
+  const ConvexShape& shape1 = model.shape(pair.geom1);
+  const ConvexShape& shape2 = model.shape(pair.geom2);
   const Pose X_WB1 = state.X_WB(model, pair.body1), X_WB2 = state.X_WB(model, pair.body2);
   ClosestPointsResult cp;
   if (ClosedFormClosestPoints(shape1, X_WB1, shape2, X_WB2, &cp)) return std::max(0.0, -cp.distance);
@@ -86,12 +84,12 @@ bool FindInitialOverlap(const Model& model, const State& state, double tolerance
 
 namespace {
 
-// max { u . x : x in body b at pose X_WB } for a unit u_W (m): closed form where the shape has one, otherwise its
-// bounding sphere (an upper bound; +inf for an unbounded shape).
-double UpperSupport(const Body& body, const Pose& X_WB, const Vec3& u_W) {
+// max { u . x : x in a shape of a body at pose X_WB } for a unit u_W (m): closed form where the shape has one,
+// otherwise its bounding sphere (an upper bound; +inf for an unbounded shape).
+double UpperSupport(const ConvexShape& shape, const Pose& X_WB, const Vec3& u_W) {
   Vec3 p_W;
-  if (SupportPoint(body.shape, X_WB, u_W, &p_W)) return u_W.dot(p_W);
-  return u_W.dot(X_WB * body.shape.X_BS.translation()) + body.shape.BoundingRadius();
+  if (SupportPoint(shape, X_WB, u_W, &p_W)) return u_W.dot(p_W);
+  return u_W.dot(X_WB * shape.X_BS.translation()) + shape.BoundingRadius();
 }
 
 }  // namespace
@@ -110,8 +108,7 @@ int FindCrossing(const Model& model, const State& start, const StepKinematics& k
     const Pose X_WB2_start = start.X_WB(model, pair.body2);
     const Vec3 n0_W = X_WB2_start.linear() * (X_BW_end.linear() * n_W);
     const Vec3 p0_W = X_WB2_start * (X_BW_end * p_WA2);
-    const Body& body1 = model.bodies[pair.body1];
-    if (UpperSupport(body1, start.X_WB(model, pair.body1), n0_W) >= n0_W.dot(p0_W)) continue;
+    if (UpperSupport(model.shape(pair.geom1), start.X_WB(model, pair.body1), n0_W) >= n0_W.dot(p0_W)) continue;
     if (detail) *detail = "pair '" + model.PairName(blk.pair) + "' crossed within the step from t = " + FormatNumber(start.t) + " s";
     return static_cast<int>(c);
   }

@@ -85,8 +85,8 @@ bool CanTouchWithinStep(const Model& model, const StepperOptions& options, doubl
   const ContactPair& p = model.pairs[pair];
   const int k1 = model.velocity_slot[p.body1], k2 = model.velocity_slot[p.body2];
   if (k1 < 0 || k2 < 0) return true;
-  const ConvexShape& s1 = model.bodies[p.body1].shape;
-  const ConvexShape& s2 = model.bodies[p.body2].shape;
+  const ConvexShape& s1 = model.shape(p.geom1);
+  const ConvexShape& s2 = model.shape(p.geom2);
   const double R1 = s1.BoundingRadius(), R2 = s2.BoundingRadius();
   if (!std::isfinite(R1) || !std::isfinite(R2)) return true;
   const double lever1 = s1.X_BS.translation().norm(), lever2 = s2.X_BS.translation().norm();
@@ -106,11 +106,11 @@ bool CanTouchWithinStep(const Model& model, const StepperOptions& options, doubl
 // joined with the pairs the end-of-step check forced in (Data::forced_pairs).
 void SelectPairs(const Model& model, const StepperOptions& options, double h, const State& state, Data* data) {
   const double fall = 0.5 * model.gravity_W.norm() * h * h;
-  for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
-    data->X_WB[b] = state.X_WB(model, b);
-    const int k = model.velocity_slot[b];
-    const double lever = model.bodies[b].shape.X_BS.translation().norm();  // of the bounding sphere's centre (m)
-    data->inflation[b] =
+  for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) data->X_WB[b] = state.X_WB(model, b);
+  for (int g = 0; g < static_cast<int>(model.geoms.size()); ++g) {
+    const int k = model.velocity_slot[model.geoms[g].body];
+    const double lever = model.shape(g).X_BS.translation().norm();  // of the bounding sphere's centre (m)
+    data->inflation[g] =
         k < 0 ? 0.0 : h * (state.v_WB(k).norm() + state.w_WB(k).norm() * lever) + fall + options.broad_phase_margin;
   }
   data->broad.FindPairs(data->X_WB, data->inflation, &data->candidates);
@@ -128,18 +128,15 @@ void SelectPairs(const Model& model, const StepperOptions& options, double h, co
 // Pairs whose spheres overlap, unless the shapes are certified apart (CertifiedApart), are added to
 // Data::forced_pairs; returns how many.
 int CheckLeftOutPairs(const Model& model, const State& end, Data* data) {
-  for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) {
-    data->X_WB[b] = end.X_WB(model, b);
-    data->inflation[b] = 0.0;
-  }
+  for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) data->X_WB[b] = end.X_WB(model, b);
+  std::fill(data->inflation.begin(), data->inflation.end(), 0.0);
   data->broad.FindPairs(data->X_WB, data->inflation, &data->candidates);
   data->layout.ActivePairs(&data->pairs);
   int missing = 0;
   for (int pair : data->candidates) {
     if (std::binary_search(data->pairs.begin(), data->pairs.end(), pair)) continue;
     const ContactPair& p = model.pairs[pair];
-    if (CertifiedApart(model.bodies[p.body1].shape, data->X_WB[p.body1], model.bodies[p.body2].shape,
-                       data->X_WB[p.body2], 0.0)) {
+    if (CertifiedApart(model.shape(p.geom1), data->X_WB[p.body1], model.shape(p.geom2), data->X_WB[p.body2], 0.0)) {
       continue;
     }
     data->forced_pairs.push_back(pair);
@@ -302,8 +299,7 @@ bool VelocityReversed(const Model& model, const State& state, int slot, const Ei
 // The fastest speed of a point of body `slot` within its bounding sphere, |v_WB| + |w_WB| R (m/s; |v_WB| for a body
 // without a bounded shape).
 double BodySpeed(const Model& model, const State& state, int slot) {
-  const ConvexShape& shape = model.bodies[model.moving_bodies[slot]].shape;
-  const double reach = shape.X_BS.translation().norm() + shape.BoundingRadius();
+  const double reach = model.BodyReach(model.moving_bodies[slot]);
   return state.v_WB(slot).norm() + (std::isfinite(reach) ? state.w_WB(slot).norm() * reach : 0.0);
 }
 

@@ -26,19 +26,21 @@ TEST(BroadPhase, CandidatesEqualABruteForceBoundingSphereTest) {
     X_WB[b] = state.X_WB(model, static_cast<int>(b));
     inflation[b] = model.bodies[b].is_fixed ? 0.0 : margin(rng);
   }
+  std::vector<double> shape_inflation;  // per shape: its body's
+  for (const Geom& geom : model.geoms) shape_inflation.push_back(inflation[geom.body]);
   BroadPhase broad = MakeBroadPhase(model);
   std::vector<int> found;
-  broad.FindPairs(X_WB, inflation, &found);
+  broad.FindPairs(X_WB, shape_inflation, &found);
   std::vector<int> expected;
   for (int c = 0; c < static_cast<int>(model.pairs.size()); ++c) {
     const int i = model.pairs[c].body1, j = model.pairs[c].body2;  // i moves
     const Vec3 p_i = X_WB[i].translation();
-    const double reach_i = model.bodies[i].shape.BoundingRadius() + inflation[i];
+    const double reach_i = model.bodies[i].shapes[0].BoundingRadius() + inflation[i];
     bool candidate;
-    if (model.bodies[j].shape.type == ShapeType::kHalfSpace) {  // the walls and the floor: z <= 0 in their frames
+    if (model.bodies[j].shapes[0].type == ShapeType::kHalfSpace) {  // the walls and the floor: z <= 0 in their frames
       candidate = (X_WB[j].inverse() * p_i).z() <= reach_i;
     } else {
-      candidate = (p_i - X_WB[j].translation()).norm() <= reach_i + model.bodies[j].shape.BoundingRadius() + inflation[j];
+      candidate = (p_i - X_WB[j].translation()).norm() <= reach_i + model.bodies[j].shapes[0].BoundingRadius() + inflation[j];
     }
     if (candidate) expected.push_back(c);
   }

@@ -126,7 +126,10 @@ void CompareShapes(const std::string& at, const ConvexShape& a, const ConvexShap
     c.Same(at + ".is_fixed", p.is_fixed == q.is_fixed);
     c.Doubles(at + ".mass", &p.mass, &q.mass, 1);
     c.Matrix(at + ".I_B", p.I_B, q.I_B);
-    CompareShapes(at + ".shape", p.shape, q.shape, &c);
+    c.Same(at + ".shapes.size", p.shapes.size() == q.shapes.size());
+    for (size_t k = 0; k < std::min(p.shapes.size(), q.shapes.size()); ++k) {
+      CompareShapes(at + ".shapes[" + std::to_string(k) + "]", p.shapes[k], q.shapes[k], &c);
+    }
     c.Pose(at + ".X_BL", p.X_BL, q.X_BL);
     c.Pose(at + ".X_WB0", p.X_WB0, q.X_WB0);
     c.Matrix(at + ".v_WB0", p.v_WB0, q.v_WB0);

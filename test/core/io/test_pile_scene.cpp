@@ -43,8 +43,8 @@ TEST(PileScene, LayoutFollowsTheScenarioAndSpheresStartApart) {
     // The walls hold the bodies in: every wall's half-space excludes the box's centre.
     for (const char* wall : {"floor", "wall_px", "wall_nx", "wall_py", "wall_ny"}) {
       const Body& w = model.bodies[model.FindBody(wall)];
-      const Pose X_WS = w.X_WB0 * w.shape.X_BS;
-      EXPECT_GT(w.shape.inequalities[0].Value(X_WS.inverse() * Vec3(0, 0, 0.2)), 0.0) << wall;
+      const Pose X_WS = w.X_WB0 * w.shapes[0].X_BS;
+      EXPECT_GT(w.shapes[0].inequalities[0].Value(X_WS.inverse() * Vec3(0, 0, 0.2)), 0.0) << wall;
     }
   }
   EXPECT_THROW(MakePileUrdf(0, PileShape::kSphere), std::invalid_argument);
@@ -70,7 +70,7 @@ TEST(PileScene, EllipsoidRowsAreSpreadToTheNearestNonOverlappingLayout) {
                                        std::make_pair(&spread, &overlapping_after)}) {
       const Body& left = model->bodies[model->FindBody("body_" + std::to_string(i - 1))];
       const Body& right = model->bodies[model->FindBody("body_" + std::to_string(i))];
-      const ClosestPointsResult cp = FindClosestPoints(left.shape, left.X_WB0, right.shape, right.X_WB0);
+      const ClosestPointsResult cp = FindClosestPoints(left.shapes[0], left.X_WB0, right.shapes[0], right.X_WB0);
       *count += cp.distance < 1e-6;
     }
     EXPECT_GE(b.X_WB0.translation().x() - spread.bodies[spread.FindBody("body_" + std::to_string(i - 1))]
@@ -123,7 +123,7 @@ TEST(PileScene, RandomOrientationsFollowTheSeedAndStartApart) {
       const Body& b = model.bodies[model.FindBody("body_" + std::to_string(k))];
       if ((a.X_WB0.translation() - b.X_WB0.translation()).norm() > 0.14) continue;
       ++close_pairs;
-      EXPECT_GT(FindClosestPoints(a.shape, a.X_WB0, b.shape, b.X_WB0).distance, 1e-6) << i << " " << k;
+      EXPECT_GT(FindClosestPoints(a.shapes[0], a.X_WB0, b.shapes[0], b.X_WB0).distance, 1e-6) << i << " " << k;
     }
   }
   EXPECT_GT(close_pairs, 10);  // the check saw neighbours

@@ -215,32 +215,32 @@ std::string Robot(const std::string& arm_mesh, const std::string& arm_inertial =
 // Every mesh vertex (given in the link frame: the collision origin is identity) satisfies every inequality of the
 // body's shape, and every face plane passes through at least 3 of them. Returns the number of faces.
 int ExpectHullOfVertices(const Body& body, const std::vector<Vec3>& vertices_L) {
-  const Pose X_SL = body.shape.X_BS.inverse() * body.X_BL;
-  std::vector<int> touching(body.shape.inequalities.size(), 0);
+  const Pose X_SL = body.shapes[0].X_BS.inverse() * body.X_BL;
+  std::vector<int> touching(body.shapes[0].inequalities.size(), 0);
   for (const Vec3& v_L : vertices_L) {
-    for (size_t i = 0; i < body.shape.inequalities.size(); ++i) {
-      const double f = body.shape.inequalities[i].Value(X_SL * v_L);  // m
+    for (size_t i = 0; i < body.shapes[0].inequalities.size(); ++i) {
+      const double f = body.shapes[0].inequalities[i].Value(X_SL * v_L);  // m
       EXPECT_LE(f, 1e-9) << "vertex " << v_L.transpose() << " outside face " << i;
       touching[i] += std::abs(f) <= 1e-9;
     }
   }
   for (size_t i = 0; i < touching.size(); ++i) EXPECT_GE(touching[i], 3) << "face " << i;
-  return static_cast<int>(body.shape.inequalities.size());
+  return static_cast<int>(body.shapes[0].inequalities.size());
 }
 
 TEST_F(RobotUrdf, BinaryStlBoxBecomesSixFacesSpanningItsBoundingBox) {
   const Model model = Load(Robot("box_binary.stl"));
   const Body& arm = model.bodies[model.FindBody("arm")];
-  EXPECT_EQ(arm.shape.type, ShapeType::kIntersection);
+  EXPECT_EQ(arm.shapes[0].type, ShapeType::kIntersection);
   EXPECT_EQ(ExpectHullOfVertices(arm, BoxCorners(kHalf, kCentre)), 6);
-  EXPECT_EQ(arm.shape.vertices.size(), 8u);
-  EXPECT_NEAR(arm.shape.BoundingRadius(), kHalf.norm(), 1e-12);  // S sits at the box's centre
+  EXPECT_EQ(arm.shapes[0].vertices.size(), 8u);
+  EXPECT_NEAR(arm.shapes[0].BoundingRadius(), kHalf.norm(), 1e-12);  // S sits at the box's centre
   // Support along the link axes: the bounding box of the mesh (world = link frame at the start: X_WL = X_WB X_BL).
   const Pose X_WL = arm.X_WB0 * arm.X_BL, X_WB = arm.X_WB0;
   for (int axis = 0; axis < 3; ++axis) {
     for (double sign : {1.0, -1.0}) {
       Vec3 p_W;
-      ASSERT_TRUE(SupportPoint(arm.shape, X_WB, sign * (X_WL.linear() * Vec3::Unit(axis)), &p_W));
+      ASSERT_TRUE(SupportPoint(arm.shapes[0], X_WB, sign * (X_WL.linear() * Vec3::Unit(axis)), &p_W));
       const Vec3 p_L = X_WL.inverse() * p_W;
       EXPECT_NEAR(p_L[axis], kCentre[axis] + sign * kHalf[axis], 1e-12);
     }
@@ -273,7 +273,7 @@ TEST_F(RobotUrdf, ScaleAndPackageUriThroughRosPackagePathAndTheResolver) {
   EXPECT_EQ(ExpectHullOfVertices(scaled.bodies[scaled.FindBody("arm")], corners), 6);
 
   const Model nested = Load(Robot("package://nested_meshes/octahedron.obj"));
-  EXPECT_EQ(nested.bodies[nested.FindBody("arm")].shape.inequalities.size(), 8u);
+  EXPECT_EQ(nested.bodies[nested.FindBody("arm")].shapes[0].inequalities.size(), 8u);
 
   LoaderOptions options;
   std::vector<std::string> asked;
@@ -282,7 +282,7 @@ TEST_F(RobotUrdf, ScaleAndPackageUriThroughRosPackagePathAndTheResolver) {
     return dir_ + "/octahedron.obj";
   };
   const Model resolved = Load(Robot("package://robot_description/meshes/arm.stl"), options);
-  EXPECT_EQ(resolved.bodies[resolved.FindBody("arm")].shape.inequalities.size(), 8u);
+  EXPECT_EQ(resolved.bodies[resolved.FindBody("arm")].shapes[0].inequalities.size(), 8u);
   ASSERT_EQ(asked.size(), 1u);
   EXPECT_EQ(asked[0], "package://robot_description/meshes/arm.stl");
 }
@@ -293,7 +293,7 @@ TEST_F(RobotUrdf, TheRootIsFixedByDefaultAndFreeWhenFloating) {
   ASSERT_EQ(fixed.bodies.size(), 4u);
   EXPECT_TRUE(fixed.bodies[fixed.FindBody("base_link")].is_fixed);
   EXPECT_TRUE(fixed.bodies[fixed.FindBody("camera")].is_fixed);
-  EXPECT_TRUE(fixed.bodies[fixed.FindBody("camera")].shape.inequalities.empty());
+  EXPECT_TRUE(fixed.bodies[fixed.FindBody("camera")].shapes.empty());
   EXPECT_EQ(fixed.FindBody("tool0"), -1);
   EXPECT_EQ(fixed.num_moving(), 2);
   ASSERT_EQ(fixed.joints.size(), 2u);
@@ -386,7 +386,7 @@ TEST_F(RobotUrdf, AMeshBoxRestsOnAPlaneAtTheHeightOfTheSameUrdfBox) {
     for (int i = 0; i < 150; ++i) ASSERT_TRUE(Step(model, options, &state, &data).converged);
     const Pose X_WB = state.X_WB(model, model.FindBody("box"));
     Vec3 lowest;
-    ASSERT_TRUE(SupportPoint(model.bodies[1].shape, X_WB, -Vec3::UnitZ(), &lowest));
+    ASSERT_TRUE(SupportPoint(model.bodies[1].shapes[0], X_WB, -Vec3::UnitZ(), &lowest));
     rest[m] = X_WB.translation().z();
     EXPECT_NEAR(lowest.z(), 0.0, 1e-3);
   }
@@ -442,17 +442,17 @@ TEST_F(RobotUrdf, AMeshAboveTheFaceCapIsSimplifiedAndTheWarningSaysSo) {
   options.max_hull_faces = 20;
   const Model model = Load(Robot("sphere.obj"), options);
   const Body& arm = model.bodies[model.FindBody("arm")];
-  EXPECT_LE(arm.shape.inequalities.size(), 20u);
+  EXPECT_LE(arm.shapes[0].inequalities.size(), 20u);
   ASSERT_EQ(warnings_.size(), 1u);
   RecordProperty("warning", warnings_[0]);
   EXPECT_NE(warnings_[0].find("link 'arm': collision mesh 'sphere.obj' replaced by its convex hull (" +
-                              std::to_string(arm.shape.inequalities.size()) + " faces; simplified from 396 faces"),
+                              std::to_string(arm.shapes[0].inequalities.size()) + " faces; simplified from 396 faces"),
             std::string::npos)
       << warnings_[0];
-  const Pose X_SL = arm.shape.X_BS.inverse() * arm.X_BL;
+  const Pose X_SL = arm.shapes[0].X_BS.inverse() * arm.X_BL;
   // Within 1e-8 m: assimp's OBJ number parser is not correctly rounded (about one float ulp at 0.1 m).
   for (const Vec3& p : AsFloats(sphere)) {
-    for (const Inequality& q : arm.shape.inequalities) EXPECT_LE(q.Value(X_SL * p), 1e-8);
+    for (const Inequality& q : arm.shapes[0].inequalities) EXPECT_LE(q.Value(X_SL * p), 1e-8);
   }
 }
 
@@ -473,9 +473,14 @@ TEST_F(RobotUrdf, BadMeshesNameTheLinkAndTheFile) {
   const std::string garbage = LoadError(Robot("garbage.stl"));
   EXPECT_NE(garbage.find("link 'arm'"), std::string::npos) << garbage;
   EXPECT_NE(garbage.find("garbage.stl"), std::string::npos) << garbage;
-  // A moving mesh link needs a mass: the existing error.
-  const std::string massless = LoadError(Robot("box_binary.stl", ""));
-  EXPECT_NE(massless.find("link 'arm': a moving link needs <inertial>"), std::string::npos) << massless;
+  // A moving link with neither <inertial> nor <collision> has no mass to take.
+  std::string bare = Robot("box_binary.stl", "");
+  const std::string arm_collision = "<collision><origin xyz='0 0 0'/><geometry><mesh filename='box_binary.stl'/>"
+                                    "</geometry></collision>";
+  bare.erase(bare.find(arm_collision), arm_collision.size());
+  const std::string massless = LoadError(bare);
+  EXPECT_NE(massless.find("link 'arm': a moving link needs <inertial> or a <collision>"), std::string::npos)
+      << massless;
   // Nothing is warned about a load that fails.
   EXPECT_TRUE(warnings_.empty());
 }
@@ -506,15 +511,23 @@ TEST_F(RobotUrdf, RootOptionsAreRefusedForAWorldRootAndOutOfRangeCaps) {
   LoaderOptions sheared;
   sheared.X_W_root.linear()(0, 1) = 0.5;
   EXPECT_THROW(Load(Robot("box_binary.stl"), sheared), std::invalid_argument);
-  // A floating root without <inertial>: the existing moving-link error names it.
-  const std::string robot = Robot("box_binary.stl");
-  try {
-    Load(robot, floating);
-    ADD_FAILURE() << "a massless floating root loaded";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("link 'base_link': a moving link needs <inertial>"), std::string::npos)
-        << e.what();
-  }
+  // A floating root without <inertial> takes the mass of its 0.2 x 0.2 x 0.1 m box at 1000 kg/m^3.
+  const Model free_base = Load(Robot("box_binary.stl"), floating);
+  EXPECT_NEAR(free_base.bodies[free_base.FindBody("base_link")].mass, 4.0, 1e-12);
+}
+
+TEST_F(RobotUrdf, AMeshLinkWithoutInertialTakesTheHullsMassAtWatersDensity) {
+  const Model model = Load(Robot("box_binary.stl", ""));
+  const Body& arm = model.bodies[model.FindBody("arm")];
+  const double mass = 1000.0 * 8.0 * kHalf.prod();  // kg: the box at 1000 kg/m^3
+  EXPECT_NEAR(arm.mass, mass, 1e-9 * mass);
+  EXPECT_NEAR((arm.X_BL.inverse().translation() - kCentre).norm(), 0.0, 1e-12);  // the box's centre, in the link frame
+  const Vec3 h2 = kHalf.cwiseProduct(kHalf);
+  const Vec3 I(h2.y() + h2.z(), h2.x() + h2.z(), h2.x() + h2.y());  // m/3 (b^2 + c^2) with half extents
+  EXPECT_LT((arm.I_B - Mat3(Vec3(mass / 3.0 * I).asDiagonal())).norm(), 1e-9 * arm.I_B.norm()) << arm.I_B;
+  int notes = 0;
+  for (const std::string& w : warnings_) notes += w.find("'arm'") != std::string::npos && w.find("1000 kg/m^3") != std::string::npos;
+  EXPECT_EQ(notes, 1);
 }
 
 // Points on a sphere (radius 0.1 m): about 2 N triangles before the cap.

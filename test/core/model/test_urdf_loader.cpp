@@ -26,7 +26,7 @@ TEST(UrdfLoader, P3SceneHasTheScenarioParameters) {
   EXPECT_TRUE(m.gravity_W.isZero());
   EXPECT_TRUE(ball.X_WB0.translation().isApprox(Vec3(0, 6.62105263157895, 8.78417110772903)));
   EXPECT_TRUE(m.bodies[m.FindBody("sphere_b")].is_fixed);
-  EXPECT_DOUBLE_EQ(m.bodies[m.FindBody("sphere_b")].shape.size[0], 9.0);
+  EXPECT_DOUBLE_EQ(m.bodies[m.FindBody("sphere_b")].shapes[0].size[0], 9.0);
   ASSERT_EQ(m.pairs.size(), 2u);
   EXPECT_EQ(m.PairName(0), "ball-sphere_a");
   EXPECT_EQ(m.PairName(1), "ball-sphere_b");
@@ -37,11 +37,11 @@ TEST(UrdfLoader, P3SceneHasTheScenarioParameters) {
 TEST(UrdfLoader, P1DiscIsACylinderAlongWorldYWithLockedAxes) {
   const Model m = LoadSceneFromFile(ScenePath("p1_ngon10.urdf"));
   const Body& disc = m.bodies[m.FindBody("disc")];
-  EXPECT_EQ(disc.shape.type, ShapeType::kPrism);
-  EXPECT_EQ(disc.shape.sides, 10);
-  const Vec3 axis_W = disc.X_WB0.linear() * disc.shape.X_BS.linear() * Vec3::UnitZ();
+  EXPECT_EQ(disc.shapes[0].type, ShapeType::kPrism);
+  EXPECT_EQ(disc.shapes[0].sides, 10);
+  const Vec3 axis_W = disc.X_WB0.linear() * disc.shapes[0].X_BS.linear() * Vec3::UnitZ();
   EXPECT_NEAR(std::abs(axis_W.y()), 1.0, 1e-12);
-  const Vec3 vertex_W = disc.X_WB0 * (disc.shape.X_BS * Vec3(1.0, 0, 0));  // the prism's vertex on +x
+  const Vec3 vertex_W = disc.X_WB0 * (disc.shapes[0].X_BS * Vec3(1.0, 0, 0));  // the prism's vertex on +x
   EXPECT_NEAR(vertex_W.z(), 0.0, 1e-12);                                    // points down, onto the ground
   EXPECT_TRUE(disc.v_WB0.isApprox(Vec3(-3, 0, 0)));
   EXPECT_TRUE(disc.w_WB0.isApprox(Vec3(0, -3, 0)));
@@ -119,7 +119,8 @@ TEST(UrdfLoader, RefusesBadScenesNamingWhatIsWrong) {
   ExpectRefused(Scene("<geometry><box size='1 2'/></geometry>"),
                 "link 'ball' <collision> <geometry> <box> attribute 'size'");
   ExpectRefused(Scene("<geometry><mesh filename='x.stl'/></geometry>"), "link 'ball': collision mesh 'x.stl'");
-  ExpectRefused(Scene(kSphere, "", "", "floating"), "link 'ball'");
+  ExpectRefused(Scene("<geometry><box size='1 1 1'/></geometry><implicit type='halfspace'/>", "", "", "floating"),
+                "link 'ball': its mass properties cannot come from its shapes");
   ExpectRefused(Scene(kSphere, "", std::string("<inertial><mass value='1'/><inertia ixx='1' iyy='1' izz='1' ixy='0' "
                                                "ixz='0' iyz='0'/></inertial>"),
                       "revolute"),

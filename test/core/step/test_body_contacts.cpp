@@ -68,8 +68,8 @@ TEST(BodyContacts, TwoEllipsoidsRestOnEachOtherOnTheGround) {
     if (++step % 30 == 0) {  // the oracle certifies the solver's separating planes
       for (size_t c = 0; c < mm.pairs.size(); ++c) {
         const ContactPair& p = mm.pairs[c];
-        max_bound = std::max(max_bound, PenetrationBound(mm.bodies[p.body1].shape, s.X_WB(mm, p.body1),
-                                                         mm.bodies[p.body2].shape, s.X_WB(mm, p.body2),
+        max_bound = std::max(max_bound, PenetrationBound(mm.shape(p.geom1), s.X_WB(mm, p.body1),
+                                                         mm.shape(p.geom2), s.X_WB(mm, p.body2),
                                                          d.contacts[c].p_WA2, d.contacts[c].n_W));
       }
     }

@@ -206,8 +206,8 @@ TEST(Joints, TwoLinkArmPushesAnEllipsoidWithoutInterpenetrationCertifiedIndepend
     for (const ContactResult& c : d.contacts) {  // near pairs: the plane of the solver's contact certifies them
       if (c.gap > 1e-3) continue;
       const ContactPair& pair = m.pairs[c.pair];
-      worst_bound = std::max(worst_bound, PenetrationBound(m.bodies[pair.body1].shape, s.X_WB(m, pair.body1),
-                                                           m.bodies[pair.body2].shape, s.X_WB(m, pair.body2),
+      worst_bound = std::max(worst_bound, PenetrationBound(m.shape(pair.geom1), s.X_WB(m, pair.body1),
+                                                           m.shape(pair.geom2), s.X_WB(m, pair.body2),
                                                            c.p_WA2, c.n_W));
       ++certified;
     }

@@ -27,7 +27,7 @@ Model RockingEllipsoid(double lift = 0.0) {
   Body egg = test_models::MovingBody("egg", MakeEllipsoid(Vec3(0.2, 0.1, 0.06)), 1.0, Pose::Identity());
   egg.X_WB0.linear() = Eigen::AngleAxisd(0.2, Vec3::UnitY()).toRotationMatrix();
   Vec3 lowest;
-  SupportPoint(egg.shape, egg.X_WB0, -Vec3::UnitZ(), &lowest);
+  SupportPoint(egg.shapes[0], egg.X_WB0, -Vec3::UnitZ(), &lowest);
   egg.X_WB0.translation() = Vec3(0, 0, lift - lowest.z());
   m.bodies.push_back(egg);
   return test_models::Finish(m, FrictionParams{1.0, 1.0, 1.0, 0.01});
@@ -91,7 +91,7 @@ TEST(RattleEnergy, RockingEllipsoidNeverPenetratesByItsSupportPoint) {
   double lowest_z = 1.0;
   RunScene(model, RattleOptions(0.01), 3.0, [&](const Model& m, const State& s, const Data&, const StepReport&) {
     Vec3 lowest;
-    SupportPoint(m.bodies[1].shape, s.X_WB(m, 1), -Vec3::UnitZ(), &lowest);
+    SupportPoint(m.bodies[1].shapes[0], s.X_WB(m, 1), -Vec3::UnitZ(), &lowest);
     lowest_z = std::min(lowest_z, lowest.z());
   });
   EXPECT_GE(lowest_z, -1e-8);
@@ -156,7 +156,7 @@ TEST(RattleEnergy, DroppedEllipsoidNeverGainsEnergyAndNeverPenetrates) {
                                 [&](const Model& m, const State& s, const Data&, const StepReport&) {
       max_gain = std::max(max_gain, Energy(m, s) - E0);
       Vec3 lowest;
-      SupportPoint(m.bodies[1].shape, s.X_WB(m, 1), -Vec3::UnitZ(), &lowest);
+      SupportPoint(m.bodies[1].shapes[0], s.X_WB(m, 1), -Vec3::UnitZ(), &lowest);
       lowest_z = std::min(lowest_z, lowest.z());
     });
     std::printf("[ rattle ] dropped ellipsoid h = %g: largest energy gain %.3g J, lowest point %.3g m\n", h, max_gain,

@@ -19,7 +19,7 @@ using testing_support::ScenePath;
 
 // Lowest world z of the (only) moving body's shape, from closed forms: cylinder or regular prism.
 double LowestPointZ(const Body& body, const Pose& X_WB) {
-  const ConvexShape& shape = body.shape;
+  const ConvexShape& shape = body.shapes[0];
   const Pose X_WS = X_WB * shape.X_BS;
   const double r = shape.size[0], half_length = shape.size[2];
   if (shape.type == ShapeType::kCylinder) {
@@ -152,18 +152,18 @@ TEST(P3SphereOnTwoSpheres, EventsVelocityAndNonPenetrationMatchTheReference) {
       active[c] = now;
       const int other = m.pairs[c].body2;
       // Independent checks: the oracle certifies the solver's separating plane; the closed form for spheres.
-      max_bound = std::max(max_bound, PenetrationBound(m.bodies[ball].shape, s.X_WB(m, ball), m.bodies[other].shape,
+      max_bound = std::max(max_bound, PenetrationBound(m.bodies[ball].shapes[0], s.X_WB(m, ball), m.bodies[other].shapes[0],
                                                        s.X_WB(m, other), contact.p_WA2, contact.n_W));
       const double centre_distance = (s.X_WB(m, ball).translation() - s.X_WB(m, other).translation()).norm();
       if (contact.gap > 1e-3 && std::lround(s.t * 100) % 10 == 0) {  // separated: the oracle's closest points
         const ClosestPointsResult cp =
-            ComputeClosestPoints(m.bodies[ball].shape, s.X_WB(m, ball), m.bodies[other].shape, s.X_WB(m, other));
+            ComputeClosestPoints(m.bodies[ball].shapes[0], s.X_WB(m, ball), m.bodies[other].shapes[0], s.X_WB(m, other));
         ASSERT_TRUE(cp.solved);
         max_oracle_gap_error = std::max({max_oracle_gap_error, std::abs(cp.distance - contact.gap),
                                          (cp.p_W1 - contact.p_WA1).norm(), (cp.p_W2 - contact.p_WA2).norm()});
         ++oracle_checks;
       }
-      max_closed_form = std::max(max_closed_form, m.bodies[other].shape.size[0] + 1.0 - centre_distance);
+      max_closed_form = std::max(max_closed_form, m.bodies[other].shapes[0].size[0] + 1.0 - centre_distance);
     }
     if (slide_b < 0.0 && active[pair_b] && d.contacts[pair_b].slip_speed > 1e-4) slide_b = s.t;
     if (std::abs(s.t - 3.5) < 1e-9) v_at_3_5 = s.v.head<3>();

@@ -88,10 +88,10 @@ void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, b
       const int locals[2] = {blocks[c].body1, blocks[c].body2};
       for (int side = 0; side < 2; ++side) {
         const Body& body = model.bodies[problems.layout.bodies()[locals[side]]];
-        if (!body.shape.IsBounded()) continue;
+        if (!body.shapes[0].IsBounded()) continue;
         const BodyStart& start = problems.kinematics.start(locals[side]);
         Vec3 point;
-        SupportPoint(body.shape, test_models::MakePose(start.p0, start.R0), side == 0 ? Vec3(-n0) : n0, &point);
+        SupportPoint(body.shapes[0], test_models::MakePose(start.p0, start.R0), side == 0 ? Vec3(-n0) : n0, &point);
         frame.segment<3>(blocks[c].offset + (side == 0 ? pair_index::kA1 : pair_index::kA2)) = point;
       }
     }

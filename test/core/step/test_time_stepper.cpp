@@ -298,7 +298,7 @@ TEST(TimeStepper, ThePapersStepRocksAnEllipsoidDownLikeBackwardEulerAndNeverGain
   Body egg = MovingBody("egg", MakeEllipsoid(Vec3(0.2, 0.1, 0.06)), 1.0, Pose::Identity());
   egg.X_WB0.linear() = Eigen::AngleAxisd(0.2, Vec3::UnitY()).toRotationMatrix();
   Vec3 lowest;
-  ASSERT_TRUE(SupportPoint(egg.shape, egg.X_WB0, -Vec3::UnitZ(), &lowest));
+  ASSERT_TRUE(SupportPoint(egg.shapes[0], egg.X_WB0, -Vec3::UnitZ(), &lowest));
   egg.X_WB0.translation() = Vec3(0, 0, -lowest.z());  // touching the ground
   m.bodies.push_back(egg);
   const Model model = test_models::Finish(m, FrictionParams{1.0, 1.0, 1.0, 0.01});

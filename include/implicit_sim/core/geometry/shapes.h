@@ -61,6 +61,10 @@ struct ConvexShape {
   // Volume (m^3) and inertia about the shape-frame origin for unit density (m^5), closed forms per primitive.
   // Throws std::invalid_argument for a shape without a closed form (half-space, general intersection).
   void UnitDensityMassProperties(double* volume, Mat3* inertia_S) const;
+  // Volume (m^3), centroid in S (m) and inertia about the centroid in S's axes for unit density (m^5): the closed
+  // forms above (centroid 0), or for a polytope with vertices (a mesh hull) its faces' divergence sum. Throws
+  // std::invalid_argument for a half-space or a general intersection without vertices.
+  void UnitDensityMassProperties(double* volume, Vec3* centroid_S, Mat3* inertia_S) const;
   std::string TypeName() const;
 };
 

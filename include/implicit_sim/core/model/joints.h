@@ -60,11 +60,15 @@ struct JointDrive {            // one per model joint; inactive when stiffness =
   double stiffness = 0;        // kp >= 0: N m/rad or N/m
   double damping = 0;          // kd >= 0: N m s/rad or N s/m
 };
+// A joint position this close to a limit (rad or m) counts as on it: a drive may hold a finger measured at -1e-16
+// below its lower limit of 0.
+constexpr double kJointLimitRoundOff = 1e-12;
 // The largest stiffness (N m/rad or N/m) and damping (N m s/rad or N s/m) CheckJointDrive accepts.
 constexpr double kMaxJointDriveGain = 1e12;
 inline bool JointDriveActive(const JointDrive& drive) { return drive.stiffness != 0.0 || drive.damping != 0.0; }
 // Whether `drive` is valid for `joint`: finite targets, gains in [0, kMaxJointDriveGain], and if active a joint with a
-// coordinate (never a fixed joint) and a position target within [lower, upper] for a limited joint. Otherwise false,
+// coordinate (never a fixed joint) and a position target within [lower, upper] (give or take kJointLimitRoundOff) for
+// a limited joint. Otherwise false,
 // with a message naming the joint in *error (if not null).
 bool CheckJointDrive(const Joint& joint, const JointDrive& drive, std::string* error);
 // position_target - q (rad or m); for a revolute or continuous joint without limits, whose position is an angle in

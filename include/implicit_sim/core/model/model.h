@@ -26,7 +26,9 @@ struct Body {
   bool is_fixed = false;        // fixed to the world (pose X_WB0 forever)
   double mass = 0.0;            // kg (moving bodies)
   Mat3 I_B = Mat3::Zero();      // rotational inertia about the centre of mass, body frame (kg m^2)
-  ConvexShape shape;            // in the body frame B (origin at the centre of mass)
+  // The collision shapes, in the body frame B (origin at the centre of mass): the body is their union, one per URDF
+  // <collision> (each shape of one body meets each shape of another as its own contact pair). Empty: no collision.
+  std::vector<ConvexShape> shapes;
   Pose X_BL = Pose::Identity(); // pose of the URDF link frame L in B (non-identity when <inertial> has an origin)
   Pose X_WB0 = Pose::Identity();  // initial pose of B in the world W
   Vec3 v_WB0 = Vec3::Zero();    // initial linear velocity of the centre of mass, world frame (m/s)
@@ -71,21 +73,31 @@ struct Joint {
   int size() const { return num_equalities() + (limited ? 2 : 0) + (friction > 0.0 ? 2 : 0); }
 };
 
-// A candidate contact between body1 and body2 (indices into Model::bodies). body1 is always a moving body.
+// One collision shape of the model: Body::shapes[index] of bodies[body].
+struct Geom {
+  int body = -1;
+  int index = 0;
+};
+
+// A candidate contact between shape geom1 of body1 and shape geom2 of body2 (indices into Model::bodies and
+// Model::geoms). body1 is always a moving body.
 struct ContactPair {
   int body1 = -1;
   int body2 = -1;
+  int geom1 = -1;
+  int geom2 = -1;
   FrictionParams friction;
 };
 
 struct Model {
   std::vector<Body> bodies;
+  std::vector<Geom> geoms;         // every body's shapes, body by body, in shape order (Finalize builds it)
   std::vector<ContactPair> pairs;
   std::vector<Joint> joints;       // parents before children
   std::vector<int> moving_bodies;  // indices of the moving bodies, in URDF order: velocity slot k -> body index
   std::vector<int> velocity_slot;  // body index -> velocity slot, -1 for fixed bodies
-  // Pairs are listed by (lower body index i, higher index j), i ascending then j ascending; the pairs whose lower
-  // index is i are pairs[pairs_of_lower[i] .. pairs_of_lower[i + 1]). Size bodies + 1.
+  // Pairs are listed by (lower geom index i, higher index j), i ascending then j ascending; the pairs whose lower
+  // geom is i are pairs[pairs_of_lower[i] .. pairs_of_lower[i + 1]). Size geoms + 1.
   std::vector<int> pairs_of_lower;
   Vec3 gravity_W = Vec3(0.0, 0.0, -9.81);  // m/s^2
   std::string scene_name;
@@ -103,12 +115,20 @@ struct Model {
   int FindBody(const std::string& name) const;  // -1 if absent
   int FindJoint(const std::string& name) const;  // -1 if absent
   bool Joined(int i, int j) const;  // whether a joint joins bodies i and j directly
-  // The pair of bodies i and j (either order), -1 if they form none (both fixed, or one has no shape).
+  const ConvexShape& shape(int geom) const { return bodies[geoms[geom].body].shapes[geoms[geom].index]; }
+  // The pair of geoms i and j (either order), -1 if they form none (one body, both fixed, or joined bodies).
+  int GeomPairIndex(int i, int j) const;
+  // The first pair of bodies i and j (either order; their only one when each has one shape), -1 if none.
   int PairIndex(int i, int j) const;
-  std::string PairName(int pair) const;  // "<link1>-<link2>", body1 first
-  // Builds moving_bodies, velocity_slot and one pair for every two bodies with shapes of which at least one moves and
-  // that no joint joins directly (adjacent links touch at their joint by design, as in MoveIt's default ACM).
-  // `pair_friction(i, j)` gives the friction of the pair; bodies must already be filled in.
+  // "<link1>-<link2>", body1 first; a body with several shapes is named "<link>#<k>" for its k-th shape (from 0).
+  std::string PairName(int pair) const;
+  std::string GeomName(int geom) const;  // "<link>", or "<link>#<k>" on a body with several shapes
+  // The largest distance from a body's centre of mass to a point of its shapes (m): 0 without shapes, +inf for a
+  // half-space or a general intersection.
+  double BodyReach(int body) const;
+  // Builds moving_bodies, velocity_slot, geoms and one pair for every two shapes of two bodies of which at least one
+  // moves and that no joint joins directly (adjacent links touch at their joint by design, as in MoveIt's default
+  // ACM). `pair_friction(i, j)` gives the friction of bodies i and j; bodies must already be filled in.
   template <typename FrictionOf>
   void Finalize(FrictionOf pair_friction);
   // A force scale (N) for the solver's row scaling: over the moving bodies, the largest of |m g + f_applied| and
@@ -130,22 +150,31 @@ void Model::Finalize(FrictionOf pair_friction) {
       moving_bodies.push_back(i);
     }
   }
+  geoms.clear();
+  for (int b = 0; b < static_cast<int>(bodies.size()); ++b) {
+    for (int k = 0; k < static_cast<int>(bodies[b].shapes.size()); ++k) geoms.push_back(Geom{b, k});
+  }
   pairs.clear();
-  pairs_of_lower.assign(bodies.size() + 1, 0);
-  for (int i = 0; i < static_cast<int>(bodies.size()); ++i) {
-    pairs_of_lower[i] = static_cast<int>(pairs.size());
-    for (int j = i + 1; j < static_cast<int>(bodies.size()); ++j) {
-      if (bodies[i].is_fixed && bodies[j].is_fixed) continue;
-      if (bodies[i].shape.inequalities.empty() || bodies[j].shape.inequalities.empty()) continue;
+  pairs_of_lower.assign(geoms.size() + 1, 0);
+  for (int gi = 0; gi < static_cast<int>(geoms.size()); ++gi) {
+    pairs_of_lower[gi] = static_cast<int>(pairs.size());
+    const int i = geoms[gi].body;
+    for (int gj = gi + 1; gj < static_cast<int>(geoms.size()); ++gj) {
+      const int j = geoms[gj].body;
+      if (i == j || (bodies[i].is_fixed && bodies[j].is_fixed)) continue;
+      if (shape(gi).inequalities.empty() || shape(gj).inequalities.empty()) continue;
       if (Joined(i, j)) continue;
+      const bool swap = bodies[i].is_fixed;  // body1 moves
       ContactPair pair;
-      pair.body1 = bodies[i].is_fixed ? j : i;  // body1 moves
-      pair.body2 = bodies[i].is_fixed ? i : j;
+      pair.body1 = swap ? j : i;
+      pair.body2 = swap ? i : j;
+      pair.geom1 = swap ? gj : gi;
+      pair.geom2 = swap ? gi : gj;
       pair.friction = pair_friction(pair.body1, pair.body2);
       pairs.push_back(pair);
     }
   }
-  pairs_of_lower[bodies.size()] = static_cast<int>(pairs.size());
+  pairs_of_lower[geoms.size()] = static_cast<int>(pairs.size());
 }
 
 }  // namespace implicit_sim

@@ -109,8 +109,8 @@ class Data {
   // --- broad-phase workspace ---
   BroadPhase broad;
   std::vector<int> pairs, candidates, forced_pairs, merged, new_blocks;
-  std::vector<Pose> X_WB;
-  std::vector<double> inflation;
+  std::vector<Pose> X_WB;          // per body
+  std::vector<double> inflation;   // per shape (Model::geoms), m
   Eigen::VectorXd z_remap;
   // RATTLE: per pair of the NCP, whether z holds its closest points at the start of the step (see IslandSolve).
   std::vector<char> frame_known;

@@ -98,18 +98,21 @@ void RattlePositionProblem::SetStartFrames(const Eigen::VectorXd& z_start, const
         IsClosed(z_start[blk.offset + pi::kD], z_start[blk.normal_force()], kinematics().force_scale());
     use_start_frame_[c] = known[c] && closed;
     if (!use_start_frame_[c]) continue;
-    const ContactFeature feature1 = StartFeature(blk.body1, blk.offset + pi::kA1, blk.offset + pi::kAlpha);
-    const ContactFeature feature2 = StartFeature(blk.body2, blk.offset + pi::kA2, blk.beta());
+    const ContactPair& pair = layout().model().pairs[blk.pair];
+    const ConvexShape& shape1 = layout().model().shape(pair.geom1);
+    const ConvexShape& shape2 = layout().model().shape(pair.geom2);
+    const ContactFeature feature1 = StartFeature(shape1, blk.body1, blk.offset + pi::kA1, blk.offset + pi::kAlpha);
+    const ContactFeature feature2 = StartFeature(shape2, blk.body2, blk.offset + pi::kA2, blk.beta());
     // Where the two features could touch along a line or a patch (a box flat on the ground, a cylinder on its side),
     // the closest points are not fixed by the geometry, so the start levers are arbitrary: the end frame is used.
     use_start_frame_[c] = feature1.dimension + feature2.dimension < 3;
-    drift_limit_[c] = {DriftLimit(blk.body1, feature1), DriftLimit(blk.body2, feature2)};
+    drift_limit_[c] = {DriftLimit(shape1, feature1), DriftLimit(shape2, feature2)};
   }
   chosen_start_frame_ = use_start_frame_;
 }
 
-double RattlePositionProblem::DriftLimit(int local, const ContactFeature& feature) const {
-  const double bound = layout().model().bodies[layout().bodies()[local]].shape.BoundingRadius();
+double RattlePositionProblem::DriftLimit(const ConvexShape& shape, const ContactFeature& feature) const {
+  const double bound = shape.BoundingRadius();
   // A half-space: its contact point may travel anywhere.
   if (!std::isfinite(bound)) return std::numeric_limits<double>::infinity();
   return kLeverDriftShare * std::max(bound, feature.radius);
@@ -120,9 +123,9 @@ Vec3 RattlePositionProblem::StartPointInBody(int local, int point) const {
   return start.R0.transpose() * (frame_z_.segment<3>(point) - start.p0);
 }
 
-ContactFeature RattlePositionProblem::StartFeature(int local, int point, int multipliers) const {
-  return FeatureAt(layout().model().bodies[layout().bodies()[local]].shape, StartPointInBody(local, point),
-                   &frame_z_[multipliers]);
+ContactFeature RattlePositionProblem::StartFeature(const ConvexShape& shape, int local, int point,
+                                                  int multipliers) const {
+  return FeatureAt(shape, StartPointInBody(local, point), &frame_z_[multipliers]);
 }
 
 bool RattlePositionProblem::LeverStayed(const Eigen::VectorXd& z, int c) const {

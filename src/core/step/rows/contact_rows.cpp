@@ -17,9 +17,8 @@ struct InequalityAt {  // one inequality evaluated at a world point
   Mat3 H;  // world Hessian
 };
 
-// Inequality k of the shape of bodies()[local] at its end-of-step pose, at p_W.
-InequalityAt EvaluateInequality(const RowContext& ctx, int local, int k, const Vec3& p_W) {
-  const ConvexShape& shape = ctx.model().bodies[ctx.layout.bodies()[local]].shape;
+// Inequality k of `shape` on bodies()[local] at the body's end-of-step pose, at p_W.
+InequalityAt EvaluateInequality(const RowContext& ctx, const ConvexShape& shape, int local, int k, const Vec3& p_W) {
   const BodyEnd& e = ctx.ends[local];
   const Mat3 R_WS = e.R * shape.X_BS.linear();
   const Vec3 p_WS = e.p + e.R * shape.X_BS.translation();
@@ -116,14 +115,17 @@ void AddContactRows(const RowContext& ctx, int c, const ContactRowOptions& optio
     double n_sign;
     Vec3 a, r;
     const BodyEnd* e;
+    const ConvexShape* shape;
   };
-  const Side sides[2] = {{blk.body2, off + 3, off + pi::kA2, blk.beta(), blk.k2, 1.0, a2, r2, &e2},
-                         {blk.body1, off + 6, off + pi::kA1, off + pi::kAlpha, blk.k1, -1.0, a1, r1, &e1}};
+  const ContactPair& pair = ctx.model().pairs[blk.pair];
+  const Side sides[2] = {
+      {blk.body2, off + 3, off + pi::kA2, blk.beta(), blk.k2, 1.0, a2, r2, &e2, &ctx.model().shape(pair.geom2)},
+      {blk.body1, off + 6, off + pi::kA1, off + pi::kAlpha, blk.k1, -1.0, a1, r1, &e1, &ctx.model().shape(pair.geom1)}};
   for (const Side& side : sides) {
     out.Phi.segment<3>(side.rows) = side.n_sign * n;
     add(side.rows, off + pi::kN, side.n_sign * I3);
     for (int k = 0; k < side.count; ++k) {
-      const InequalityAt ev = EvaluateInequality(ctx, side.body, k, side.a);
+      const InequalityAt ev = EvaluateInequality(ctx, *side.shape, side.body, k, side.a);
       const double mult = z[side.mult_col + k];
       out.Phi.segment<3>(side.rows) -= mult * ev.g;
       add(side.rows, side.mult_col + k, -ev.g);

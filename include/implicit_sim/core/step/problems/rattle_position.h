@@ -55,13 +55,13 @@ class RattlePositionProblem final : public StepProblem {
   void AddRows(const RowContext& ctx) const override;
   // The start-of-step closest point frame_z_[point..+3) in the frame of body `local` (into layout().bodies()) (m).
   Vec3 StartPointInBody(int local, int point) const;
-  // The feature of body `local` (into layout().bodies()) at its start-of-step closest point frame_z_[point..+3), with
-  // the multipliers from frame_z_[multipliers].
-  ContactFeature StartFeature(int local, int point, int multipliers) const;
-  // How far (m) a contact point may move on body `local` within the step, in its frame, and keep the start frame:
+  // The feature of `shape` on body `local` (into layout().bodies()) at its start-of-step closest point
+  // frame_z_[point..+3), with the multipliers from frame_z_[multipliers].
+  ContactFeature StartFeature(const ConvexShape& shape, int local, int point, int multipliers) const;
+  // How far (m) a contact point may move on `shape` within the step, in its body's frame, and keep the start frame:
   // kLeverDriftShare of the larger of its bounding radius and the feature's radius of curvature (the contact rolling
   // through kLeverDriftShare rad); infinite for a half-space.
-  double DriftLimit(int local, const ContactFeature& feature) const;
+  double DriftLimit(const ConvexShape& shape, const ContactFeature& feature) const;
   // Whether block c's contact point stayed within its drift limit on both bodies between frame_z_ and z.
   bool LeverStayed(const Eigen::VectorXd& z, int block) const;
   const std::vector<JointDrive>& drives_;
