@@ -127,6 +127,8 @@ bool CheckJointDrive(const Joint& joint, const JointDrive& drive, std::string* e
     problem = "stiffness and damping must be in [0, 1e12] (kMaxJointDriveGain)";
   } else if (JointDriveActive(drive) && !joint.has_coordinate()) {
     problem = "a fixed joint cannot be driven";
+  } else if (JointDriveActive(drive) && joint.mimics()) {
+    problem = "the joint mimics another joint (drive that one)";
   } else if (JointDriveActive(drive) && joint.limited &&
              !(drive.position_target >= joint.lower - kJointLimitRoundOff &&
                drive.position_target <= joint.upper + kJointLimitRoundOff)) {

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "implicit_sim/core/base/format.h"
+#include "implicit_sim/core/model/joints.h"
 #include "loader_util.h"
 
 namespace implicit_sim {
@@ -53,7 +54,17 @@ void CheckJointElement(const tinyxml2::XMLElement* j, const std::string& where, 
   if (std::find(kTypes.begin(), kTypes.end(), type) == kTypes.end()) {
     Fail(where + ": type '" + type + "' is not supported (allowed: floating, fixed, revolute, continuous, prismatic)");
   }
-  if (j->FirstChildElement("mimic")) Fail(where + ": <mimic> is not supported");
+  if (const tinyxml2::XMLElement* mimic = j->FirstChildElement("mimic")) {
+    const std::string at = where + " <mimic>";
+    if (type != "revolute" && type != "continuous" && type != "prismatic") {
+      Fail(at + ": only a revolute, continuous or prismatic joint can mimic another");
+    }
+    CheckAttributes(mimic, {"joint", "multiplier", "offset"}, at);
+    if (!mimic->Attribute("joint")) Fail(at + ": missing attribute 'joint'");
+    for (const char* name : {"multiplier", "offset"}) {
+      if (mimic->Attribute(name)) CheckNumbers(mimic, name, at, 1, false);
+    }
+  }
   const tinyxml2::XMLElement* axis = j->FirstChildElement("axis");
   if (axis && type != "fixed" && type != "floating") {
     CheckAttributes(axis, {"xyz"}, where + " <axis>");
@@ -101,6 +112,41 @@ JointStarts ReadJointStarts(const tinyxml2::XMLElement* sim, const urdf::ModelIn
     const double effort_limit = joint->limits && joint->limits->effort > 0.0 ? joint->limits->effort : 1e9;
     start.effort = ReadScalar(e, "effort", where, -effort_limit, effort_limit, false, 0.0, false);
     starts[name] = start;
+  }
+  // A mimic joint starts where its leader puts it (a start of its own must agree).
+  for (const auto& [name, joint] : urdf.joints_) {
+    if (!joint->mimic) continue;
+    const std::string where = JointWhere(*joint) + " <mimic>";
+    const urdf::JointConstSharedPtr leader = urdf.getJoint(joint->mimic->joint_name);
+    if (!leader) Fail(where + ": attribute 'joint' = '" + joint->mimic->joint_name + "' names no joint of the scene");
+    if (leader == joint || leader->mimic || !HasCoordinate(*leader)) {
+      Fail(where + ": joint '" + leader->name + "' must be another revolute, continuous or prismatic joint that "
+                   "mimics none");
+    }
+    const auto lead = starts.find(leader->name);
+    JointStart follow;
+    if (lead != starts.end()) {
+      follow.position = joint->mimic->multiplier * lead->second.position + joint->mimic->offset;
+      follow.velocity = joint->mimic->multiplier * lead->second.velocity;
+    } else {
+      follow.position = joint->mimic->offset;
+    }
+    const auto own = starts.find(name);
+    if (own != starts.end()) {
+      if (std::abs(own->second.position - follow.position) > 1e-9 ||
+          std::abs(own->second.velocity - follow.velocity) > 1e-9) {
+        Fail("<implicit_sim><joint name='" + name + "'>: the joint mimics '" + leader->name +
+             "', which puts it at position " + FormatNumber(follow.position) + " and velocity " +
+             FormatNumber(follow.velocity));
+      }
+      follow.effort = own->second.effort;
+    }
+    if (IsLimited(*joint) && (follow.position < joint->limits->lower - kJointLimitRoundOff ||
+                              follow.position > joint->limits->upper + kJointLimitRoundOff)) {
+      Fail(where + ": its leader's start puts it at " + FormatNumber(follow.position) + ", outside its limits [" +
+           FormatNumber(joint->limits->lower) + ", " + FormatNumber(joint->limits->upper) + "]");
+    }
+    starts[name] = follow;
   }
   return starts;
 }
@@ -162,6 +208,11 @@ void ReadJointParameters(const urdf::Joint& u, const JointStarts& starts, Joint*
       Fail(where + " <dynamics> attribute 'friction' = " + FormatNumber(joint->friction) +
            " is out of range [0, 1e9]");
     }
+  }
+  if (u.mimic) {
+    joint->mimic_multiplier = u.mimic->multiplier;
+    joint->mimic_offset = u.mimic->offset;
+    joint->limited = false;  // its leader's limits bound it; its own rows would repeat them at a shared stop
   }
   const auto start = starts.find(u.name);
   if (start != starts.end()) {
@@ -262,6 +313,14 @@ void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, co
     const Pose X_WJ = InitialLinkPose(*urdf.getLink(parent_link), starts, root) * X_AJ;
     SetChildVelocity(*model, joint, X_WJ, a, &child);
     model->joints.push_back(joint);
+  }
+  for (Joint& joint : model->joints) {  // leaders by name, now that every joint has its index
+    const urdf::JointConstSharedPtr u = urdf.getJoint(joint.name);
+    if (!u->mimic) continue;
+    joint.mimic_leader = model->FindJoint(u->mimic->joint_name);
+    if (joint.mimic_leader < 0) {
+      Fail(JointWhere(*u) + " <mimic>: joint '" + u->mimic->joint_name + "' moves no body");
+    }
   }
 }
 

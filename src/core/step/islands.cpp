@@ -62,7 +62,10 @@ void PartitionIslands(const Model& model, Data* data) {
   for (const PairBlock& blk : data->layout.blocks()) {
     Join(&root, SlotOf(model, model.pairs[blk.pair].body1), SlotOf(model, model.pairs[blk.pair].body2));
   }
-  for (const Joint& joint : model.joints) Join(&root, SlotOf(model, joint.parent), SlotOf(model, joint.child));
+  for (const Joint& joint : model.joints) {
+    Join(&root, SlotOf(model, joint.parent), SlotOf(model, joint.child));
+    if (joint.mimics()) Join(&root, SlotOf(model, joint.child), SlotOf(model, model.joints[joint.mimic_leader].child));
+  }
   // Number the islands by their lowest slot (every root is its island's lowest slot) and collect their members into
   // the islands' membership lists, kept apart until compared with the current ones.
   std::vector<int>& island_of = data->island_of_slot;

@@ -245,6 +245,23 @@ TEST(StepProblemJacobian, JointDriveRowsInEveryStage) {
   }
 }
 
+// A mimic row (Joint::mimic_leader) coupling two chains: the continuous axle on its fixed post follows the revolute
+// shoulder at -0.5 q + 0.2 rad, in every stage, dense and sparse.
+TEST(StepProblemJacobian, MimicRowInEveryStage) {
+  Model model = test_models::JointedRobot();
+  Joint& axle = model.joints[model.FindJoint("axle")];
+  axle.mimic_leader = model.FindJoint("shoulder");
+  axle.mimic_multiplier = -0.5;
+  axle.mimic_offset = 0.2;
+  unsigned seed = 60;
+  for (const Stage stage : {Stage::kPaper, Stage::kRattlePosition, Stage::kRattleVelocity}) {
+    for (const bool sparse : {false, true}) {
+      SCOPED_TRACE("stage " + std::to_string(static_cast<int>(stage)) + (sparse ? ", sparse" : ", dense"));
+      ExpectJacobianMatchesFiniteDifferences(model, ++seed, sparse, false, 0.0, stage);
+    }
+  }
+}
+
 TEST(StepProblemJacobian, ProjectedMultipliers) {
   ExpectJacobianMatchesFiniteDifferences(test_models::SphereOnTwoSpheres(), 14, true, true);
   ExpectJacobianMatchesFiniteDifferences(test_models::BoxAndSuperellipsoid(), 15, false, true);

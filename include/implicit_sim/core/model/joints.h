@@ -67,7 +67,7 @@ constexpr double kJointLimitRoundOff = 1e-12;
 constexpr double kMaxJointDriveGain = 1e12;
 inline bool JointDriveActive(const JointDrive& drive) { return drive.stiffness != 0.0 || drive.damping != 0.0; }
 // Whether `drive` is valid for `joint`: finite targets, gains in [0, kMaxJointDriveGain], and if active a joint with a
-// coordinate (never a fixed joint) and a position target within [lower, upper] (give or take kJointLimitRoundOff) for
+// coordinate (never a fixed joint, nor a mimic joint: its leader is driven) and a position target within [lower, upper] (give or take kJointLimitRoundOff) for
 // a limited joint. Otherwise false,
 // with a message naming the joint in *error (if not null).
 bool CheckJointDrive(const Joint& joint, const JointDrive& drive, std::string* error);

@@ -65,12 +65,19 @@ struct Joint {
   double initial_position = 0.0;  // rad or m
   double initial_velocity = 0.0;  // rad/s or m/s
   double applied_effort = 0.0;    // constant effort (N m or N), within +-effort_limit when that is > 0
+  // URDF <mimic joint multiplier offset>: this joint's position is held at mimic_multiplier q_leader + mimic_offset by
+  // one more equality (its multiplier the row's last unknown); -1: none. A follower has no limit rows of its own.
+  int mimic_leader = -1;
+  double mimic_multiplier = 1.0;  // (-)
+  double mimic_offset = 0.0;      // rad or m
 
   bool has_coordinate() const { return type != JointType::kFixed; }
+  bool mimics() const { return mimic_leader >= 0; }
   int num_equalities() const { return type == JointType::kFixed ? 6 : 5; }
-  // Unknowns of the joint in the step NCP: one multiplier per equality, two limit multipliers when limited, and the
-  // friction fraction and slip speed when friction > 0.
-  int size() const { return num_equalities() + (limited ? 2 : 0) + (friction > 0.0 ? 2 : 0); }
+  // Unknowns of the joint in the step NCP: one multiplier per equality, two limit multipliers when limited, the
+  // friction fraction and slip speed when friction > 0, and the mimic multiplier last (mimic_column()).
+  int size() const { return num_equalities() + (limited ? 2 : 0) + (friction > 0.0 ? 2 : 0) + (mimics() ? 1 : 0); }
+  int mimic_column() const { return size() - 1; }  // offset of the mimic multiplier in the joint's block
 };
 
 // One collision shape of the model: Body::shapes[index] of bodies[body].

@@ -302,6 +302,17 @@ void RattleVelocityProblem::AddJointRateRows(const RowContext& ctx) const {
       AddJointForce(ctx, G_q, joint.friction * (S - 0.5 * stage1_z_[col]), col, joint.friction, eP, eC);
     }
     if (joint.damping > 0.0) AddJointDamping(ctx, joint, 0.5, eP, eC, G_q);
+    if (joint.mimics()) {  // qdot - c qdot_leader = 0 along the end-of-step gradients, as the equalities' rates
+      const int k = joint.mimic_leader, col = o + joint.mimic_column();
+      const BodyEnd &eLP = ctx.ParentEnd(k), &eLC = ctx.ChildEnd(k);
+      const JointGradient& G_leader = joint_position_end_[k];
+      const double c = joint.mimic_multiplier;
+      ctx.out.Phi[col] = rate - c * G_leader.Rate(eLP.v, eLP.w, eLC.v, eLC.w);
+      AddRateRow(ctx, col, G_q, eP, eC, 1.0);
+      AddRateRow(ctx, col, G_leader, eLP, eLC, -c);
+      AddJointForce(ctx, G_q, z[col], col, 1.0, eP, eC);
+      AddJointForce(ctx, G_leader, -c * z[col], col, -c, eLP, eLC);
+    }
     if (layout().driven_joints()[j]) {
       const int col = layout().drive_column(j);
       AddAverageDriveRow(ctx, j, drives_[j], stage1_z_[col], joint_q_end_[j], eP, eC, G_q);

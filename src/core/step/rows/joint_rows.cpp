@@ -29,6 +29,23 @@ void AddJointLimitRows(const RowContext& ctx, const Joint& joint, int col, const
   AddJointForce(ctx, G_q, -ctx.z[col + 1], col + 1, -1.0, eP, eC);
 }
 
+// (q - c q_leader - offset) / h = 0 at the end of the step, its multiplier along both joints' start gradients.
+void AddMimicRow(const RowContext& ctx, int j) {
+  const Joint& joint = ctx.model().joints[j];
+  const int k = joint.mimic_leader, row = ctx.layout.joint_offset(j) + joint.mimic_column();
+  const Joint& leader = ctx.model().joints[k];
+  const BodyEnd &eP = ctx.ParentEnd(j), &eC = ctx.ChildEnd(j), &eLP = ctx.ParentEnd(k), &eLC = ctx.ChildEnd(k);
+  const double h = ctx.h(), c = joint.mimic_multiplier;
+  JointGradient g, g_leader;
+  const double q = JointPosition(joint, MakePose(eP.p, eP.R), MakePose(eC.p, eC.R), &g);
+  const double q_leader = JointPosition(leader, MakePose(eLP.p, eLP.R), MakePose(eLC.p, eLC.R), &g_leader);
+  ctx.out.Phi[row] = (q - c * q_leader - joint.mimic_offset) / h;
+  AddEndGradientRow(ctx, row, g, eP, eC, 1.0 / h);
+  AddEndGradientRow(ctx, row, g_leader, eLP, eLC, -c / h);
+  AddJointForce(ctx, ctx.kinematics.position_gradient(j), ctx.z[row], row, 1.0, eP, eC);
+  AddJointForce(ctx, ctx.kinematics.position_gradient(k), -c * ctx.z[row], row, -c, eLP, eLC);
+}
+
 }  // namespace
 
 void AddJointRows(const RowContext& ctx, double share, const std::vector<JointDrive>& drives) {
@@ -57,6 +74,7 @@ void AddJointRows(const RowContext& ctx, double share, const std::vector<JointDr
       AddJointForce(ctx, G_q, bound * s, col, bound, eP, eC);
     }
     if (joint.damping > 0.0) AddJointDamping(ctx, joint, share, eP, eC, G_q);
+    if (joint.mimics()) AddMimicRow(ctx, j);
     if (ctx.layout.driven_joints()[j]) AddDriveRow(ctx, j, drives[j], share, eP, eC, G_q);
   }
 }

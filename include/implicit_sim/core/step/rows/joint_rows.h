@@ -6,6 +6,8 @@
 //                       (0 <= limit impulse _|_ distance to the limit >= 0)
 //   the next two rows   Coulomb joint friction (rows/friction_rows.h): qdot + s_f sigma_f = 0 and FB(sigma_f, 1 - s_f^2),
 //                       friction force F_c s_f
+//   the next row        a mimic joint (Joint::mimic_leader k): (q - c q_k - offset) / h = 0 at the end of the step,
+//                       its multiplier mu acting as mu G_q on this joint and -c mu G_q(k) on its leader
 //   the last row        the drive, if the joint is driven (rows/drive_rows.h)
 // and on the body rows the generalized joint force G^T f / Fs with
 //   f = sum_i lambda_i G_i + (l_lo - l_hi + F_c s_f - c qdot + tau) G_q,   qdot = G_q . nu (implicit damping c),
