@@ -221,16 +221,16 @@ void RenameAll(XMLElement* robot, const std::string& prefix) {
   }
   for (XMLElement* e = sim ? sim->FirstChildElement() : nullptr; e; e = e->NextSiblingElement()) {
     const std::string tag = e->Name();
-    if (tag == "friction") {
+    if (tag == "friction" || tag == "disable_collisions") {
       Rename(e, "link1", prefix, true);
       Rename(e, "link2", prefix, true);
-    } else if (tag == "body") {
+    } else if (tag == "body" || tag == "self_collide") {
       Rename(e, "link", prefix, true);
     } else if (tag == "joint") {
       Rename(e, "name", prefix, false);
     } else {
       Fail(std::string(kAdd) + "addition <implicit_sim>: unknown element <" + tag +
-           "> (allowed: friction, body, joint)");
+           "> (allowed: friction, body, joint, self_collide, disable_collisions)");
     }
   }
 }
@@ -340,7 +340,7 @@ std::vector<std::string> RemoveSubtrees(XMLElement* robot, const std::set<std::s
   XMLElement* sim = SimOf(robot, false);
   for (XMLElement* e = sim ? sim->FirstChildElement() : nullptr; e; e = e->NextSiblingElement()) {
     const std::string tag = e->Name();
-    if (Names(e, "link1", links) || Names(e, "link2", links) || (tag == "body" && Names(e, "link", links)) ||
+    if (Names(e, "link1", links) || Names(e, "link2", links) || ((tag == "body" || tag == "self_collide") && Names(e, "link", links)) ||
         (tag == "joint" && Names(e, "name", joints))) {
       doomed.push_back(e);
     }

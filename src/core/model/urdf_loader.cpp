@@ -18,6 +18,7 @@
 #include "implicit_sim/core/base/format.h"
 #include "loader_util.h"
 #include "mesh_loader.h"
+#include "self_collision.h"
 #include "urdf_joints.h"
 
 namespace implicit_sim {
@@ -537,12 +538,15 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
         if (b < 0) Fail("<implicit_sim><body>: attribute 'link' must name a link of the scene");
         if (model.bodies[b].is_fixed) Fail("<implicit_sim><body link='" + std::string(link) + "'>: the link is fixed");
         ReadBodySettings(e, &model.bodies[b]);
-      } else if (tag != "joint") {  // <joint>: ReadJointStarts
-        Fail("<implicit_sim>: unknown element <" + tag + "> (allowed: friction, body, joint)");
+      } else if (tag != "joint" && tag != "self_collide" && tag != "disable_collisions") {
+        // <joint>: ReadJointStarts; <self_collide>, <disable_collisions>: ExcludeSelfCollisions
+        Fail("<implicit_sim>: unknown element <" + tag +
+             "> (allowed: friction, body, joint, self_collide, disable_collisions)");
       }
     }
   }
   BuildJoints(*urdf_model, joint_starts, placement, &model, &notes);
+  ExcludeSelfCollisions(sim, *urdf_model, &model);
   model.Finalize([&](int i, int j) {
     for (const auto& key : {std::make_pair(model.bodies[i].name, model.bodies[j].name),
                             std::make_pair(model.bodies[j].name, model.bodies[i].name)}) {

@@ -329,10 +329,17 @@ TEST(Joints, LoaderBuildsTheJointTreeWithFramesLimitsDynamicsAndStarts) {
     EXPECT_NEAR(JointVelocity(model, state, model.FindJoint(name)), expected.second, 1e-12);
   }
   EXPECT_NEAR(JointVelocity(model, state, model.FindJoint("weld")), 0.0, 1e-15);
-  // Joined bodies form no contact pair; others do.
+  // Joined bodies form no contact pair; nor, without self-collision (the default, as Gazebo's), do other links of
+  // one robot; with it they do. The wheel on its fixed post is another robot and meets the arm.
   EXPECT_LT(model.PairIndex(model.FindBody("base"), model.FindBody("slider")), 0);
   EXPECT_LT(model.PairIndex(model.FindBody("slider"), model.FindBody("finger")), 0);
-  EXPECT_GE(model.PairIndex(model.FindBody("base"), model.FindBody("finger")), 0);
+  EXPECT_LT(model.PairIndex(model.FindBody("base"), model.FindBody("finger")), 0);
+  EXPECT_GE(model.PairIndex(model.FindBody("wheel"), model.FindBody("finger")), 0);
+  std::string self_colliding = test_models::kJointedRobotUrdf;
+  self_colliding.insert(self_colliding.find("</implicit_sim>"), "<self_collide link=\"finger\"/>");
+  const Model with_self = LoadSceneFromString(self_colliding, "jointed_robot");
+  EXPECT_LT(with_self.PairIndex(with_self.FindBody("base"), with_self.FindBody("slider")), 0);
+  EXPECT_GE(with_self.PairIndex(with_self.FindBody("base"), with_self.FindBody("finger")), 0);
 }
 
 // Dense with every pair, and with the broad phase and the sparse solve (KLU): the joint blocks stay in every NCP

@@ -1,8 +1,10 @@
 // The model: everything about a scene that does not change while it runs. Const after loading.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "implicit_sim/core/geometry/broad_phase.h"
@@ -108,6 +110,9 @@ struct Model {
   std::vector<int> pairs_of_lower;
   Vec3 gravity_W = Vec3(0.0, 0.0, -9.81);  // m/s^2
   std::string scene_name;
+  // Body pairs (lower index, higher index; sorted) that form no contact pair: links of one robot without
+  // self-collision and pairs a scene or SRDF disables (doc/scenes.md#self-collision). Set before Finalize.
+  std::vector<std::pair<int, int>> excluded_pairs;
 
   int num_moving() const { return static_cast<int>(moving_bodies.size()); }
   // Sizes of State::q (position and unit quaternion per moving body) and State::v (linear and angular velocity).
@@ -134,8 +139,9 @@ struct Model {
   // half-space or a general intersection.
   double BodyReach(int body) const;
   // Builds moving_bodies, velocity_slot, geoms and one pair for every two shapes of two bodies of which at least one
-  // moves and that no joint joins directly (adjacent links touch at their joint by design, as in MoveIt's default
-  // ACM). `pair_friction(i, j)` gives the friction of bodies i and j; bodies must already be filled in.
+  // moves, that no joint joins directly (adjacent links touch at their joint by design, as in MoveIt's default ACM)
+  // and that excluded_pairs does not list. `pair_friction(i, j)` gives the friction of bodies i and j; bodies must
+  // already be filled in.
   template <typename FrictionOf>
   void Finalize(FrictionOf pair_friction);
   // A force scale (N) for the solver's row scaling: over the moving bodies, the largest of |m g + f_applied| and
@@ -170,7 +176,7 @@ void Model::Finalize(FrictionOf pair_friction) {
       const int j = geoms[gj].body;
       if (i == j || (bodies[i].is_fixed && bodies[j].is_fixed)) continue;
       if (shape(gi).inequalities.empty() || shape(gj).inequalities.empty()) continue;
-      if (Joined(i, j)) continue;
+      if (Joined(i, j) || std::binary_search(excluded_pairs.begin(), excluded_pairs.end(), std::make_pair(i, j))) continue;
       const bool swap = bodies[i].is_fixed;  // body1 moves
       ContactPair pair;
       pair.body1 = swap ? j : i;
