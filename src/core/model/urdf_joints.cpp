@@ -94,7 +94,8 @@ void CheckJointElement(const tinyxml2::XMLElement* j, const std::string& where, 
   }
 }
 
-JointStarts ReadJointStarts(const tinyxml2::XMLElement* sim, const urdf::ModelInterface& urdf) {
+JointStarts ReadJointStarts(const tinyxml2::XMLElement* sim, const urdf::ModelInterface& urdf,
+                            const std::map<std::string, double>& positions) {
   JointStarts starts;
   for (auto* e = sim ? sim->FirstChildElement("joint") : nullptr; e; e = e->NextSiblingElement("joint")) {
     const char* name = e->Attribute("name");
@@ -112,6 +113,30 @@ JointStarts ReadJointStarts(const tinyxml2::XMLElement* sim, const urdf::ModelIn
     const double effort_limit = joint->limits && joint->limits->effort > 0.0 ? joint->limits->effort : 1e9;
     start.effort = ReadScalar(e, "effort", where, -effort_limit, effort_limit, false, 0.0, false);
     starts[name] = start;
+  }
+  for (const auto& [name, q] : positions) {
+    const std::string where = "LoaderOptions::joint_positions['" + name + "']";
+    const urdf::JointConstSharedPtr joint = urdf.getJoint(name);
+    if (!joint || !HasCoordinate(*joint) || joint->mimic) {
+      Fail(where + ": must name a revolute, continuous or prismatic joint of the scene that mimics none");
+    }
+    if (!std::isfinite(q) || (IsLimited(*joint) && (q < joint->limits->lower - kJointLimitRoundOff ||
+                                                    q > joint->limits->upper + kJointLimitRoundOff))) {
+      Fail(where + " = " + FormatNumber(q) + " is out of range [" +
+           (IsLimited(*joint) ? FormatNumber(joint->limits->lower) + ", " + FormatNumber(joint->limits->upper)
+                              : std::string("finite")) + "]");
+    }
+    starts[name].position = q;
+  }
+  for (const auto& [name, joint] : urdf.joints_) {  // the URDF's zero pose where no start is given
+    if (!IsLimited(*joint) || joint->mimic || starts.count(name) || !(joint->limits->lower <= joint->limits->upper)) {
+      continue;  // an inverted range is refused with its own message
+    }
+    if (joint->limits->lower > kJointLimitRoundOff || joint->limits->upper < -kJointLimitRoundOff) {
+      Fail(JointWhere(*joint) + " starts at 0, outside its limits [" + FormatNumber(joint->limits->lower) + ", " +
+           FormatNumber(joint->limits->upper) + "]: give its start position (<implicit_sim><joint position>, "
+           "LoaderOptions::joint_positions)");
+    }
   }
   // A mimic joint starts where its leader puts it (a start of its own must agree).
   for (const auto& [name, joint] : urdf.joints_) {

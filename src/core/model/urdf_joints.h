@@ -27,7 +27,9 @@ struct JointStart {
   double effort = 0.0;  // constant applied effort, N m or N
 };
 using JointStarts = std::map<std::string, JointStart>;
-JointStarts ReadJointStarts(const tinyxml2::XMLElement* sim, const urdf::ModelInterface& urdf);
+// `positions` (LoaderOptions::joint_positions) override the file's positions.
+JointStarts ReadJointStarts(const tinyxml2::XMLElement* sim, const urdf::ModelInterface& urdf,
+                            const std::map<std::string, double>& positions);
 
 // Where the root of the link tree is: 'world' (fixed, identity), or a robot's base link welded to the world or free
 // at X_W_root (LoaderOptions).

@@ -468,7 +468,7 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
     CheckAttributes(sim, {"gravity"}, "<implicit_sim>");
     model.gravity_W = ReadVec3(sim, "gravity", "<implicit_sim>", model.gravity_W);
   }
-  const JointStarts joint_starts = ReadJointStarts(sim, *urdf_model);
+  const JointStarts joint_starts = ReadJointStarts(sim, *urdf_model, options.joint_positions);
 
   std::vector<std::string> from_density;  // moving links whose mass came (in part) from kDefaultDensity
   std::vector<urdf::LinkSharedPtr> links;

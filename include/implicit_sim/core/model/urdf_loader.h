@@ -13,6 +13,7 @@
 #pragma once
 
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -34,8 +35,12 @@ struct LoaderOptions {
   // A mesh hull with more faces is simplified by merging nearly coplanar facets until it has at most this many: each
   // face is one inequality, hence one multiplier per contact in the step NCP. Range [4, 10000].
   int max_hull_faces = 64;
-  // One line per mesh collision (the link, the file and the hull's face count) is appended here; null: written to
-  // std::cerr.
+  // Start positions (rad or m) of joints by name, over the scene's <implicit_sim><joint position>: each joint must be
+  // revolute, continuous or prismatic, not a mimic follower, and the position within its limits (give or take
+  // kJointLimitRoundOff). A limited joint given no start anywhere starts at 0, which must then lie within its limits.
+  std::map<std::string, double> joint_positions;
+  // The loader's notes, one line each (mesh hulls, vendor attributes ignored, mass from geometry, wide revolute
+  // ranges) are appended here; null: written to std::cerr.
   std::vector<std::string>* warnings = nullptr;
 };
 

@@ -1,0 +1,115 @@
+// Vendor robot descriptions as published (test/data/vendor: the xacro output of ros-industrial/universal_robot's
+// ur5.xacro and frankaemika/franka_ros's panda.urdf.xacro, with their collision meshes), loaded unedited: the UR5
+// (+-2 pi joints, 7 STL hulls), the Panda without <inertial> (several collisions per link, mimic fingers, franka's
+// <dynamics D K>) and the Panda with gazebo:=true. Each is held at a pose by PD drives for 1 s with every step
+// converged; the second finger is the first's mimic follower.
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "implicit_sim/core/model/joints.h"
+#include "implicit_sim/core/model/urdf_loader.h"
+#include "implicit_sim/core/step/time_stepper.h"
+
+namespace implicit_sim {
+namespace {
+
+const std::string kVendorDir = std::string(IMPLICIT_SIM_SOURCE_DIR) + "/test/data/vendor";
+
+Model LoadVendor(const std::string& relative, const std::map<std::string, double>& positions,
+                 std::vector<std::string>* notes) {
+  LoaderOptions options;
+  options.resolve_package_uri = [](const std::string& uri) {
+    return kVendorDir + "/" + uri.substr(std::string("package://").size());
+  };
+  options.joint_positions = positions;
+  options.warnings = notes;
+  return LoadSceneFromFile(kVendorDir + "/" + relative, options);
+}
+
+// Holds every driven joint (all with a coordinate but mimic followers) at its start position for `seconds`; returns
+// the largest |q - target| at the end (rad or m) and counts non-converged steps.
+double Hold(const Model& model, double seconds, int* nonconverged) {
+  StepperOptions options;
+  options.h = 0.005;
+  Data data(model);
+  State state = State::Initial(model);
+  std::vector<double> target(model.joints.size(), 0.0);
+  for (int j = 0; j < static_cast<int>(model.joints.size()); ++j) {
+    const Joint& joint = model.joints[j];
+    if (!joint.has_coordinate() || joint.mimics()) continue;
+    target[j] = JointPosition(model, state, j);
+    data.joint_drives[j] = JointDrive{target[j], 0.0, 5000.0, 100.0};
+  }
+  *nonconverged = 0;
+  for (int i = 0; i < std::lround(seconds / options.h); ++i) *nonconverged += !Step(model, options, &state, &data).converged;
+  double worst = 0.0;
+  for (int j = 0; j < static_cast<int>(model.joints.size()); ++j) {
+    if (JointDriveActive(data.joint_drives[j])) {
+      worst = std::max(worst, std::abs(JointDrivePositionError(model.joints[j], target[j], JointPosition(model, state, j))));
+    }
+  }
+  return worst;
+}
+
+TEST(VendorRobots, TheUr5LoadsAsPublishedAndIsHeldByItsDrives) {
+  std::vector<std::string> notes;
+  const Model model = LoadVendor("ur_description/urdf/ur5.urdf", {{"shoulder_lift_joint", -1.2}, {"elbow_joint", 1.0}},
+                                 &notes);
+  EXPECT_EQ(model.num_moving(), 6);
+  EXPECT_FALSE(model.joints[model.FindJoint("shoulder_pan_joint")].limited);  // +-2 pi: no limit rows
+  int nonconverged = 0;
+  const double error = Hold(model, 1.0, &nonconverged);
+  EXPECT_EQ(nonconverged, 0);
+  EXPECT_LT(error, 0.02);  // PD sag: the shoulder's gravity torque over kp = 5000 N m/rad
+  std::printf("[ vendor ] UR5: %zu bodies, %zu pairs, held 1 s with the largest joint error %.2e rad\n",
+              model.bodies.size(), model.pairs.size(), error);
+}
+
+TEST(VendorRobots, ThePandaLoadsAsPublishedWithItsFingersMimicking) {
+  // franka's "ready" pose; joint4 has limits [-3.07, -0.07] rad, so the URDF's zero pose is refused.
+  const std::map<std::string, double> ready = {{"panda_joint2", -0.785}, {"panda_joint4", -2.356},
+                                               {"panda_joint6", 1.571}, {"panda_joint7", 0.785},
+                                               {"panda_finger_joint1", 0.02}};
+  std::vector<std::string> notes;
+  try {
+    LoadVendor("franka_description/robots/panda.urdf", {}, &notes);
+    ADD_FAILURE() << "the zero pose outside joint4's limits loaded";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("joint 'panda_joint4' starts at 0, outside its limits"), std::string::npos)
+        << e.what();
+  }
+  for (const char* file : {"panda.urdf", "panda_gazebo.urdf"}) {
+    SCOPED_TRACE(file);
+    notes.clear();
+    const Model model = LoadVendor(std::string("franka_description/robots/") + file, ready, &notes);
+    const int follower = model.FindJoint("panda_finger_joint2"), leader = model.FindJoint("panda_finger_joint1");
+    ASSERT_GE(follower, 0);
+    EXPECT_EQ(model.joints[follower].mimic_leader, leader);
+    const bool published_inertia = std::string(file) == "panda_gazebo.urdf";
+    if (!published_inertia) {
+      EXPECT_EQ(model.bodies[model.FindBody("panda_link0_sc")].shapes.size(), 3u);
+    }
+    bool noted_D = false;
+    for (const std::string& note : notes) noted_D = noted_D || note.find("'D' of <dynamics>") != std::string::npos;
+    EXPECT_TRUE(noted_D);
+    int nonconverged = 0;
+    const double error = Hold(model, 1.0, &nonconverged);
+    EXPECT_EQ(nonconverged, 0);
+    // Without <inertial> the links weigh what their fat self-collision capsules hold at 1000 kg/m^3, more than the
+    // wrists' 12 N m effort limits carry: only the published inertias are held.
+    if (published_inertia) {
+      EXPECT_LT(error, 0.02);
+    }
+    double mass = 0.0;
+    for (const Body& body : model.bodies) mass += body.mass;
+    std::printf("[ vendor ] Panda (%s): %zu bodies (%.1f kg), %zu joints, held 1 s with the largest joint error "
+                "%.2e\n", file, model.bodies.size(), mass, model.joints.size(), error);
+  }
+}
+
+}  // namespace
+}  // namespace implicit_sim
