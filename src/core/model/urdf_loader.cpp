@@ -478,7 +478,11 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
   // Keep the file's link order (getLinks is ordered by name). Names are unique and non-empty (CheckUrdfStructure).
   for (auto* e = robot->FirstChildElement("link"); e; e = e->NextSiblingElement("link")) {
     const std::string name = e->Attribute("name");
-    const urdf::LinkSharedPtr& link = by_name.at(name);
+    const auto found = by_name.find(name);
+    if (found == by_name.end()) {  // urdfdom reads a name with markup-like text differently from the XML
+      Fail("link '" + name + "': urdfdom read no link of this name (use plain names: letters, digits, _ - / .)");
+    }
+    const urdf::LinkSharedPtr& link = found->second;
     CheckNothingDropped(e, *link);
     if (e->FirstChildElement("implicit")) Fail("link '" + name + "': <implicit> belongs inside <collision>");
     if (name == "world") {
