@@ -52,10 +52,13 @@ int Model::PairIndex(int i, int j) const {
   if (i == j || i < 0 || j < 0 || i >= static_cast<int>(bodies.size()) || j >= static_cast<int>(bodies.size())) {
     return -1;
   }
-  for (int gi = 0; gi < static_cast<int>(geoms.size()); ++gi) {  // geoms are ordered by body
-    if (geoms[gi].body != std::min(i, j)) continue;
-    for (int gj = gi + 1; gj < static_cast<int>(geoms.size()); ++gj) {
-      if (geoms[gj].body != std::max(i, j)) continue;
+  const auto first_geom = [this](int body) {  // geoms are ordered by body
+    return static_cast<int>(std::lower_bound(geoms.begin(), geoms.end(), body,
+                                             [](const Geom& g, int b) { return g.body < b; }) - geoms.begin());
+  };
+  const int lo = std::min(i, j), hi = std::max(i, j);
+  for (int gi = first_geom(lo); gi < first_geom(lo + 1); ++gi) {
+    for (int gj = first_geom(hi); gj < first_geom(hi + 1); ++gj) {
       const int pair = GeomPairIndex(gi, gj);
       if (pair >= 0) return pair;
     }
