@@ -27,6 +27,11 @@ void PhysicsMailbox::Stop() {
   cv_.notify_all();
 }
 
+size_t PhysicsMailbox::QueuedCommands() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return commands_.size();
+}
+
 PhysicsMailbox::Work PhysicsMailbox::WaitForWork(bool running) {
   bool job_step = false;
   {

@@ -33,6 +33,8 @@ class PhysicsMailbox {
   void Post(std::function<void()> fn);
   // Ends every wait; later RunBetweenSteps calls refuse.
   void Stop();
+  // Commands queued and not yet taken by the physics thread.
+  size_t QueuedCommands() const;
 
   // Physics thread: waits until there is something to do (`running`: the simulation is not paused), runs the
   // commands that came, and says what next.
