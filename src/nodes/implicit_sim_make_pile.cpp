@@ -1,5 +1,5 @@
-// implicit_sim_make_pile --n N --shape sphere|ellipsoid [--seed S] [--orientation aligned|random] [--e-roll M]
-// --out FILE: writes the S1 pile scene (with rolling resistance M, in m, on its friction when M > 0).
+// implicit_sim_make_pile --n N --shape sphere|ellipsoid|bracket|tee [--seed S] [--orientation aligned|random]
+// [--e-roll M] --out FILE: writes the S1 pile scene (with rolling resistance M, in m, on its friction when M > 0).
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
@@ -10,8 +10,8 @@
 
 int main(int argc, char** argv) {
   const char* usage =
-      "usage: implicit_sim_make_pile --n N --shape sphere|ellipsoid [--seed S] [--orientation aligned|random] "
-      "[--e-roll M] --out FILE";
+      "usage: implicit_sim_make_pile --n N --shape sphere|ellipsoid|bracket|tee [--seed S] "
+      "[--orientation aligned|random] [--e-roll M] --out FILE";
   std::map<std::string, std::string> values;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
@@ -32,8 +32,10 @@ int main(int argc, char** argv) {
   const long n = std::strtol(values["--n"].c_str(), &end, 10);
   const bool n_ok = *end == '\0' && n >= 1 && n <= 100000;
   const long seed = values.count("--seed") ? std::strtol(values["--seed"].c_str(), &end, 10) : 42;
-  if (!n_ok || (shape != "sphere" && shape != "ellipsoid") || *end != '\0' || seed < 0) {
-    std::cerr << "implicit_sim_make_pile: --n must be in [1, 100000], --shape sphere or ellipsoid, --seed >= 0\n";
+  implicit_sim::PileShape pile_shape;
+  if (!n_ok || !implicit_sim::ParsePileShape(shape, &pile_shape) || *end != '\0' || seed < 0) {
+    std::cerr << "implicit_sim_make_pile: --n must be in [1, 100000], --shape sphere, ellipsoid, bracket or tee, "
+                 "--seed >= 0\n";
     return 2;
   }
   const std::string orientation = values.count("--orientation") ? values["--orientation"] : "aligned";
@@ -52,8 +54,7 @@ int main(int argc, char** argv) {
   }
   // The generator's std::mt19937 takes the seed modulo 2^32.
   const std::string urdf = implicit_sim::MakePileUrdf(
-      static_cast<int>(n), shape == "sphere" ? implicit_sim::PileShape::kSphere : implicit_sim::PileShape::kEllipsoid,
-      static_cast<unsigned>(seed), true,
+      static_cast<int>(n), pile_shape, static_cast<unsigned>(seed), true,
       orientation == "random" ? implicit_sim::PileOrientation::kRandom : implicit_sim::PileOrientation::kAligned,
       e_roll);
   std::ofstream out(values["--out"]);

@@ -129,6 +129,52 @@ TEST(PileScene, RandomOrientationsFollowTheSeedAndStartApart) {
   EXPECT_GT(close_pairs, 10);  // the check saw neighbours
 }
 
+// The unions (bracket: two rounded boxes; tee: two cylinders): 0.1 kg bodies of two shapes each; in both layouts
+// no shape of one part comes within 1e-6 m of a shape of another part or of the floor and walls.
+TEST(PileScene, BracketsAndTeesAreTwoShapeBodiesThatStartApart) {
+  for (PileShape shape : {PileShape::kBracket, PileShape::kTee}) {
+    PileShape parsed;
+    ASSERT_TRUE(ParsePileShape(PileShapeName(shape), &parsed));
+    EXPECT_EQ(parsed, shape);
+    for (PileOrientation orientation : {PileOrientation::kAligned, PileOrientation::kRandom}) {
+      const Model model = LoadSceneFromString(MakePileUrdf(80, shape, 5, true, orientation), "unions");
+      ASSERT_EQ(model.num_moving(), 80);
+      int close_pairs = 0;
+      for (int i = 0; i < static_cast<int>(model.bodies.size()); ++i) {
+        const Body& a = model.bodies[i];
+        if (!a.is_fixed) {
+          EXPECT_EQ(a.shapes.size(), 2u);
+          EXPECT_NEAR(a.mass, 0.1, 1e-15);
+        }
+        for (int k = 0; k < i; ++k) {
+          const Body& b = model.bodies[k];
+          if (a.is_fixed && b.is_fixed) continue;
+          if (!a.is_fixed && !b.is_fixed &&
+              (a.X_WB0.translation() - b.X_WB0.translation()).norm() > 0.2) continue;
+          for (const ConvexShape& sa : a.shapes) {
+            for (const ConvexShape& sb : b.shapes) {
+              ++close_pairs;
+              // A certificate: a wall's half-space in closed form; between parts, a direction n whose crossing
+              // support_a(-n) + support_b(n) is below -1e-6 m (a separating plane with that margin).
+              if (a.is_fixed || b.is_fixed) {
+                ClosestPointsResult wall;
+                ASSERT_TRUE(ClosedFormClosestPoints(sa, a.X_WB0, sb, b.X_WB0, &wall));
+                EXPECT_GT(wall.distance, 1e-6) << PileShapeName(shape) << " " << a.name << " " << b.name;
+              } else {
+                EXPECT_LT(DescendCrossing(sa, a.X_WB0, sb, b.X_WB0, -1e-6, 2000).value, -1e-6)
+                    << PileShapeName(shape) << " " << a.name << " " << b.name;
+              }
+            }
+          }
+        }
+      }
+      EXPECT_GT(close_pairs, 80 * 5 * 2);  // every part's shapes against the floor and walls, and neighbours
+    }
+  }
+  PileShape unused;
+  EXPECT_FALSE(ParsePileShape("cube", &unused));
+}
+
 // Rolling resistance on the pile's friction (the batch studies' e_roll): every pair gets it, the layout stays the same,
 // and a value out of range is refused naming the range.
 TEST(PileScene, RollingResistanceReachesEveryPairAndBadValuesAreRefused) {

@@ -1,5 +1,5 @@
 // The S1 scaling scene (doc/scenes.md) as a generator: N spheres (r = 0.05 m) or ellipsoids
-// (semi-axes 0.06, 0.05, 0.04 m), 0.1 kg each, at rest in a 1 m x 1 m box (a floor z = 0 and four walls at
+// (semi-axes 0.06, 0.05, 0.04 m), or of the two unions below (brackets, T-pipes), 0.1 kg each, at rest in a 1 m x 1 m box (a floor z = 0 and four walls at
 // x, y = +-0.5, all half-spaces), mu = 0.5 (e_t = e_o = 1, e_r = 0.01 m: not given by the scenario).
 // Body i: layer = i / 64, row = (i / 8) % 8, col = i % 8;
 // x = -0.42 + 0.12 col + j1, y = -0.42 + 0.12 row + j2, z = 0.08 + 0.12 layer + |j3|, with j1, j2, j3 drawn in that
@@ -11,7 +11,8 @@
 // row of 8 to a spacing of at least 0.12 m along x, the least-squares change of the x-centres (isotonic regression by
 // pool-adjacent-violators); y and z spacings cannot overlap (>= 0.10 m for a 0.10 m width, 0.12 m for a 0.08 m
 // height), so the result overlaps nowhere, and a row needs 0.84 m of the 0.88 m the walls leave. The URDF comment
-// says how many bodies moved and the largest shift. Spheres never overlap and are left as they are.
+// says how many bodies moved and the largest shift. Spheres never overlap and are left as they are; neither do
+// brackets (80 mm long) and T-pipes (90 mm).
 //
 // With random orientations (PileOrientation::kRandom, used by the batch studies) the layout is coarser, so that the
 // bounding spheres (radius 0.06 m for either shape) cannot overlap whatever the orientations:
@@ -30,7 +31,16 @@
 
 namespace implicit_sim {
 
-enum class PileShape { kSphere, kEllipsoid };
+// kBracket: an L of two rounded boxes (superellipsoids of exponent 8): a base leg 80 x 30 x 15 mm centred at
+// (0, 0, -22.5) mm and an upright 15 x 30 x 40 mm centred at (-32.5, 0, 5) mm of the link frame, 1/15 and 1/30 kg.
+// kTee: a solid T-pipe of two cylinders: a pipe along x (r = 15 mm, 90 mm long) centred at (0, 0, -10) mm and a
+// branch along z (r = 12 mm, 40 mm long) from z = 5 to 45 mm, masses in the ratio of their volumes.
+// Every part has 0.1 kg and lies within 0.06 m of its link origin (the bounding sphere of the layouts below); the
+// unions take their mass properties from their shapes (doc/scenes.md#mass).
+enum class PileShape { kSphere, kEllipsoid, kBracket, kTee };
+// "sphere", "ellipsoid", "bracket", "tee"; ParsePileShape is its inverse (false for any other name).
+std::string PileShapeName(PileShape shape);
+bool ParsePileShape(const std::string& name, PileShape* shape);
 enum class PileOrientation { kAligned, kRandom };
 
 // The scenario's poses of bodies 0 .. n-1 (axis-aligned).
