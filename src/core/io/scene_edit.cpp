@@ -1,5 +1,6 @@
 #include "implicit_sim/core/io/scene_edit.h"
 
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -7,6 +8,7 @@
 
 #include <tinyxml2.h>
 
+#include "implicit_sim/core/base/format.h"
 #include "scene_xml.h"
 
 namespace implicit_sim {
@@ -206,6 +208,55 @@ void Rename(XMLElement* e, const char* attribute, const std::string& prefix, boo
   if (name && !(is_link && std::string(name) == "world")) e->SetAttribute(attribute, (prefix + name).c_str());
 }
 
+// Start options as <implicit_sim> entries of `robot`, in its own names (for an addition, RenameAll then prefixes
+// them): joint positions, a <self_collide> per robot and the SRDF's <disable_collisions>. `what`: "AddToScene: ",
+// "the addition" or "WithStartEntries: ", "the scene".
+void AddStartEntries(XMLElement* robot, const std::map<std::string, double>& joint_positions, bool self_collide,
+                     const std::string& srdf, const std::string& caller, const std::string& what) {
+  const std::set<std::string> joints = NamesOf(robot, "joint"), links = NamesOf(robot, "link");
+  for (const auto& [name, q] : joint_positions) {
+    if (!joints.count(name)) Fail(caller + "joint_positions: '" + name + "' is not a joint of " + what);
+    if (!std::isfinite(q)) Fail(caller + "joint_positions['" + name + "'] must be finite");
+    std::map<std::string, XMLElement*> entries = ByAttribute(SimOf(robot, false), "joint", "name");
+    XMLElement* entry = entries.count(name) ? entries[name] : nullptr;
+    if (!entry) {
+      entry = SimOf(robot, true)->InsertNewChildElement("joint");
+      entry->SetAttribute("name", name.c_str());
+    }
+    entry->SetAttribute("position", FormatNumber(q).c_str());
+  }
+  if (self_collide) {  // every parent of a joint inside a robot; one per robot would do, more are harmless
+    std::set<std::string> parents;
+    for (XMLElement* joint : ChildrenNamed(robot, "joint")) {
+      const char* type = joint->Attribute("type");
+      const std::string parent = JointLink(joint, "parent");
+      if (parent != "world" && !(type && std::string(type) == "floating")) parents.insert(parent);
+    }
+    for (const std::string& link : parents) {
+      SimOf(robot, true)->InsertNewChildElement("self_collide")->SetAttribute("link", link.c_str());
+    }
+  }
+  if (srdf.empty()) return;
+  XMLDocument srdf_doc;
+  if (srdf_doc.Parse(srdf.c_str(), srdf.size()) != tinyxml2::XML_SUCCESS || !srdf_doc.RootElement() ||
+      std::string(srdf_doc.RootElement()->Name()) != "robot") {
+    Fail(caller + "the SRDF is not an XML document with a root element <robot>");
+  }
+  for (XMLElement* e = srdf_doc.RootElement()->FirstChildElement("disable_collisions"); e;
+       e = e->NextSiblingElement("disable_collisions")) {
+    XMLElement* entry = SimOf(robot, true)->InsertNewChildElement("disable_collisions");
+    for (const char* attribute : {"link1", "link2"}) {
+      const char* link = e->Attribute(attribute);
+      if (!link || !links.count(link)) {
+        Fail(caller + "SRDF <disable_collisions " + attribute + "='" + (link ? link : "") + "'>: not a link of " +
+             what);
+      }
+      entry->SetAttribute(attribute, link);
+    }
+    if (e->Attribute("reason")) entry->SetAttribute("reason", e->Attribute("reason"));
+  }
+}
+
 // Every link and joint name and every reference to one (joint ends, <mimic joint>, <implicit_sim> entries).
 void RenameAll(XMLElement* robot, const std::string& prefix) {
   for (XMLElement* link : ChildrenNamed(robot, "link")) Rename(link, "name", prefix, true);
@@ -363,11 +414,22 @@ std::string AddToScene(const std::string& scene_urdf, const SceneAddition& addit
   CheckNoClash(scene, robot, addition.prefix);
   PlaceInWorld(robot, addition);
   if (!addition.base_dir.empty()) ResolveFileNames(robot, addition.base_dir);
+  AddStartEntries(robot, addition.joint_positions, addition.self_collide, addition.srdf, kAdd, "the addition");
   RenameAll(robot, addition.prefix);
   const std::vector<XMLElement*> materials = MaterialsToCopy(scene, robot, addition.prefix);
   const std::vector<std::string> links = Merge(scene, robot, materials);
   if (added_links) *added_links = links;
   return Print(scene_doc);
+}
+
+std::string WithStartEntries(const std::string& scene_urdf, const std::map<std::string, double>& joint_positions,
+                             const std::string& srdf) {
+  constexpr char kStarts[] = "WithStartEntries: ";
+  XMLDocument doc;
+  XMLElement* scene = ParseRobot(scene_urdf, std::string(kStarts) + "the scene", &doc);
+  if (joint_positions.empty() && srdf.empty()) return scene_urdf;
+  AddStartEntries(scene, joint_positions, false, srdf, kStarts, "the scene");
+  return Print(doc);
 }
 
 std::string RemoveFromScene(const std::string& scene_urdf, const std::vector<std::string>& links,

@@ -3,6 +3,7 @@
 // bodies; an add followed by a remove restores the model; bad inputs are refused naming the problem.
 #include "implicit_sim/core/io/scene_edit.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -16,6 +17,7 @@
 #include <tinyxml2.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include "implicit_sim/core/model/joints.h"
 #include "implicit_sim/core/model/urdf_loader.h"
 #include "io/scene_xml.h"
 #include "scenario_runner.h"
@@ -285,6 +287,64 @@ TEST(SceneEdit, SpawnsARobotWeldedAndFloating) {
   }
   EXPECT_EQ(attach_types["r1/base_joint"], "fixed");
   EXPECT_EQ(attach_types["r2/base_joint"], "floating");
+}
+
+// ~spawn's start options: joint positions by the addition's own names (an existing <implicit_sim><joint> entry keeps
+// its effort and gains the position), self-collision on request, and an SRDF's <disable_collisions> renamed.
+TEST(SceneEdit, SpawnTakesJointPositionsSelfCollideAndAnSrdf) {
+  SceneAddition arm;
+  arm.urdf = kArm;
+  arm.prefix = "r1/";
+  arm.X_WO = MakePose(0.0, Vec3(0, 0, 1), Vec3(0, 0, 1));
+  arm.joint_positions = {{"shoulder", 1.25}, {"elbow", -0.2}};
+  const Model plain = LoadSceneFromString(AddToScene(ReadScene("cube_drop.urdf"), arm, nullptr));
+  State state = State::Initial(plain);
+  EXPECT_NEAR(JointPosition(plain, state, plain.FindJoint("r1/shoulder")), 1.25, 1e-12);
+  EXPECT_NEAR(JointPosition(plain, state, plain.FindJoint("r1/elbow")), -0.2, 1e-12);
+  EXPECT_EQ(plain.joints[plain.FindJoint("r1/shoulder")].applied_effort, 1.0);
+  const int base = plain.FindBody("r1/base"), upper = plain.FindBody("r1/upper_arm");
+  const int fore = plain.FindBody("r1/forearm");
+  auto excluded = [](const Model& m, int a, int b) {
+    return std::binary_search(m.excluded_pairs.begin(), m.excluded_pairs.end(),
+                              std::make_pair(std::min(a, b), std::max(a, b)));
+  };
+  EXPECT_TRUE(excluded(plain, base, fore));  // self-collision off by default: the whole robot
+  SceneAddition colliding = arm;
+  colliding.self_collide = true;
+  const Model self = LoadSceneFromString(AddToScene(ReadScene("cube_drop.urdf"), colliding, nullptr));
+  EXPECT_FALSE(excluded(self, base, fore));
+  colliding.srdf = "<robot name='arm'><group name='g'/><disable_collisions link1='base' link2='forearm' "
+                   "reason='Never'/></robot>";
+  const Model semantic = LoadSceneFromString(AddToScene(ReadScene("cube_drop.urdf"), colliding, nullptr));
+  EXPECT_TRUE(excluded(semantic, base, fore));
+  EXPECT_FALSE(excluded(semantic, upper, semantic.FindBody("cube")));
+  auto refusal = [&](SceneAddition a) {
+    try {
+      AddToScene(ReadScene("cube_drop.urdf"), a, nullptr);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  SceneAddition bad = arm;
+  bad.joint_positions = {{"wrist", 0.1}};
+  EXPECT_EQ(refusal(bad), "AddToScene: joint_positions: 'wrist' is not a joint of the addition");
+  bad.joint_positions = {{"elbow", std::nan("")}};
+  EXPECT_EQ(refusal(bad), "AddToScene: joint_positions['elbow'] must be finite");
+  bad = arm;
+  bad.srdf = "<robot><disable_collisions link1='base' link2='hand'/></robot>";
+  EXPECT_EQ(refusal(bad), "AddToScene: SRDF <disable_collisions link2='hand'>: not a link of the addition");
+  bad.srdf = "<srdf/>";
+  EXPECT_EQ(refusal(bad), "AddToScene: the SRDF is not an XML document with a root element <robot>");
+  bad = arm;
+  bad.joint_positions = {{"elbow", 0.5}};  // beyond its limit of 0.3: the loader's message
+  const std::string beyond = AddToScene(ReadScene("cube_drop.urdf"), bad, nullptr);
+  try {
+    LoadSceneFromString(beyond);
+    ADD_FAILURE() << "a start position beyond the limit was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("r1/elbow"), std::string::npos) << e.what();
+  }
 }
 
 TEST(SceneEdit, RefusesANameClashNamingTheLinkOrJoint) {

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "implicit_sim/core/model/joint_configuration.h"
 #include "implicit_sim/core/model/joints.h"
 #include "implicit_sim/core/model/urdf_loader.h"
 #include "implicit_sim/core/step/time_stepper.h"
@@ -108,6 +109,66 @@ TEST(VendorRobots, ThePandaLoadsAsPublishedWithItsFingersMimicking) {
     for (const Body& body : model.bodies) mass += body.mass;
     std::printf("[ vendor ] Panda (%s): %zu bodies (%.1f kg), %zu joints, held 1 s with the largest joint error "
                 "%.2e\n", file, model.bodies.size(), mass, model.joints.size(), error);
+  }
+}
+
+
+// ~set_joint_positions' core (model/joint_configuration.h) on the Panda: the named joints read back exactly what was
+// set, the mimic finger follows, the joints not named keep their positions, every joint equality holds to round-off,
+// the links above the first named joint do not move, the moved links are at rest; bad requests change nothing.
+TEST(VendorRobots, SetJointPositionsPlacesThePandaExactly) {
+  const std::map<std::string, double> ready = {{"panda_joint2", -0.785}, {"panda_joint4", -2.356},
+                                               {"panda_joint6", 1.571}, {"panda_joint7", 0.785},
+                                               {"panda_finger_joint1", 0.02}};
+  std::vector<std::string> notes;
+  const Model model = LoadVendor("franka_description/robots/panda_gazebo.urdf", ready, &notes);
+  State state = State::Initial(model);
+  state.v.setConstant(0.25);  // moving: the re-placed links must end at rest, the others keep their velocities
+  const int joint4 = model.FindJoint("panda_joint4"), joint6 = model.FindJoint("panda_joint6");
+  const int finger = model.FindJoint("panda_finger_joint1"), follower = model.FindJoint("panda_finger_joint2");
+  std::vector<double> before(model.joints.size());
+  for (size_t j = 0; j < model.joints.size(); ++j) before[j] = JointPosition(model, state, static_cast<int>(j));
+  // Listed child-first on purpose: the order of the request must not matter.
+  const std::map<int, double> request = {{finger, 0.035}, {joint6, 2.5}, {joint4, -1.5}};
+  const State original = state;
+  std::string error;
+  ASSERT_TRUE(SetJointPositions(model, request, &state, &error)) << error;
+  for (size_t j = 0; j < model.joints.size(); ++j) {
+    const double q = JointPosition(model, state, static_cast<int>(j));
+    const double expected = request.count(static_cast<int>(j)) ? request.at(static_cast<int>(j))
+                            : static_cast<int>(j) == follower ? 0.035
+                                                               : before[j];
+    EXPECT_NEAR(q, expected, 1e-12) << model.joints[j].name;
+  }
+  double drift_m = 1.0, drift_rad = 1.0;
+  JointDrift(model, state, &drift_m, &drift_rad);
+  EXPECT_LT(drift_m, 1e-12);
+  EXPECT_LT(drift_rad, 1e-12);
+  const int link3 = model.FindBody("panda_link3"), link4 = model.FindBody("panda_link4");
+  const int slot3 = model.velocity_slot[link3], slot4 = model.velocity_slot[link4];
+  EXPECT_EQ(state.q.segment<7>(Model::q_offset(slot3)), original.q.segment<7>(Model::q_offset(slot3)));
+  EXPECT_EQ(state.v.segment<6>(Model::v_offset(slot3)), original.v.segment<6>(Model::v_offset(slot3)));
+  EXPECT_TRUE(state.v.segment<6>(Model::v_offset(slot4)).isZero(0.0));
+  EXPECT_GT((state.q.segment<3>(Model::q_offset(slot4)) - original.q.segment<3>(Model::q_offset(slot4))).norm(), 0.0);
+  // Refused, naming the joint and the range; the state unchanged.
+  const State set = state;
+  const int fixed = model.FindJoint("panda_joint8");
+  const std::vector<std::pair<std::map<int, double>, std::string>> refusals = {
+      {{{joint4, 0.5}}, "joint 'panda_joint4': position 0.5 is outside its limits [-3.0718, -0.0698]"},
+      {{{follower, 0.01}}, "joint 'panda_finger_joint2' mimics 'panda_finger_joint1': set that joint instead"},
+      {{{joint6, std::nan("")}}, "joint 'panda_joint6': position must be finite"},
+      {{{joint6, 1.0}, {static_cast<int>(model.joints.size()), 0.0}},
+       "joint index " + std::to_string(model.joints.size()) + " out of range [0, " +
+           std::to_string(model.joints.size()) + ")"}};
+  for (const auto& [bad, message] : refusals) {
+    EXPECT_FALSE(SetJointPositions(model, bad, &state, &error));
+    EXPECT_EQ(error, message);
+    EXPECT_EQ(state.q, set.q);
+    EXPECT_EQ(state.v, set.v);
+  }
+  if (fixed >= 0) {
+    EXPECT_FALSE(SetJointPositions(model, {{fixed, 0.0}}, &state, &error));
+    EXPECT_EQ(error, "joint 'panda_joint8' is fixed: it has no position to set");
   }
 }
 

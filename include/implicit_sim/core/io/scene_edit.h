@@ -9,6 +9,7 @@
 // rad/s, all in the world frame W unless a name says otherwise.
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,16 @@ struct SceneAddition {
   Vec3 w_WO = Vec3::Zero();  // rad/s
   // Robot additions only: the root link is welded to `world` at X_WO (false) or put on a floating joint there (true).
   bool floating_root = false;
+  // Start positions of the addition's joints (rad or m) by the addition's own joint names (before the prefix): each
+  // becomes, or overrides the position of, the addition's <implicit_sim><joint name position>; the loader checks it
+  // against the joint's type and limits.
+  std::map<std::string, double> joint_positions;
+  // true: the addition's robots collide with themselves (an <implicit_sim><self_collide> per robot); default off, as in
+  // Gazebo (doc/scenes.md#self-collision).
+  bool self_collide = false;
+  // An SRDF's text ("" = none): its <disable_collisions link1 link2 reason> elements, renamed with the prefix, join the
+  // scene's <implicit_sim>; its other elements (groups, end effectors, virtual joints) do not concern the simulator.
+  std::string srdf;
 };
 
 // The scene with the addition merged in:
@@ -54,6 +65,7 @@ struct SceneAddition {
 // - the addition's top-level <material> definitions appended, except one identical to a scene material of the same
 //   name (dropped: the scene's is used); a different one of the same name is renamed with the prefix, together with
 //   the addition's references to it;
+// - joint_positions, self_collide and the SRDF's <disable_collisions> as <implicit_sim> entries of the addition;
 // - other top-level elements of the addition (<gazebo>, <transmission>, comments) are not copied.
 // *added_links (if not null) receives the new link names in the addition's order.
 // Throws std::invalid_argument (the result is not produced) naming the thing when: either text is not a URDF robot
@@ -61,10 +73,17 @@ struct SceneAddition {
 // links), the scene has no `world` link, the addition has no link besides `world` or (a robot) not exactly one root
 // link, a new link or joint name already exists in the scene, the prefix has a character outside [A-Za-z0-9_/-],
 // base_dir is not absolute, X_WO is not finite or not a rotation, the twist is not finite, an origin that is composed
-// has an attribute other than xyz and rpy (the loader refuses quat_xyzw) or a bad number, or a new free body with a
-// locked axis would start moving along it.
+// has an attribute other than xyz and rpy (the loader refuses quat_xyzw) or a bad number, a new free body with a
+// locked axis would start moving along it, joint_positions names a joint the addition lacks or a value that is not
+// finite, or the SRDF is not an XML <robot> or names a link the addition lacks.
 std::string AddToScene(const std::string& scene_urdf, const SceneAddition& addition,
                        std::vector<std::string>* added_links);
+
+// The scene with start positions of its joints (rad or m, by name) and an SRDF's <disable_collisions> pairs ("" =
+// none) as <implicit_sim> entries: what ~load_scene takes beside the scene and the node's robot_description_semantic
+// parameter gives. Throws std::invalid_argument as AddToScene does, for a joint or link the scene lacks.
+std::string WithStartEntries(const std::string& scene_urdf, const std::map<std::string, double>& joint_positions,
+                             const std::string& srdf);
 
 // The scene without the named links and everything that hangs on them through joints (their subtrees), without the
 // joints to and inside those subtrees, and without the <implicit_sim> entries that name them (<friction> pairs with
