@@ -79,6 +79,7 @@ void SimNode::AdvertiseServices() {
   services_.push_back(pnh_.advertiseService("spawn", &SimNode::OnSpawn, this));
   services_.push_back(pnh_.advertiseService("delete", &SimNode::OnDelete, this));
   services_.push_back(pnh_.advertiseService("load_scene", &SimNode::OnLoadScene, this));
+  services_.push_back(pnh_.advertiseService("set_joint_positions", &SimNode::OnSetJointPositions, this));
   joint_effort_sub_ = SubscribeCommand("joint_effort_cmd", 100, kJointEffortInput);
   joint_command_sub_ = SubscribeCommand("joint_command", 100, kJointCommandInput);
   joint_trajectory_sub_ = SubscribeCommand("joint_trajectory", 10, kJointTrajectoryInput);

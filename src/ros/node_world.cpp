@@ -1,10 +1,12 @@
 // An open world: ~spawn, ~delete and ~load_scene. The model is const, so each edits the scene's URDF text
 // (core/io/scene_edit.h), loads a new model and swaps the whole world on the physics thread between two steps; the
 // bodies the old and new worlds share keep their state, wrenches, joint efforts and drags, matched by name. A refused
-// request (a name clash, an overlap, the loader's message) changes nothing.
+// request (a name clash, an overlap, the loader's message) changes nothing. ~set_joint_positions changes only the
+// state (core/model/joint_configuration.h).
 #include "implicit_sim/ros/sim_node.h"  // first: its generated service type Step precedes the core's function Step
 
 #include <filesystem>
+#include <map>
 #include <fstream>
 #include <sstream>
 
@@ -12,6 +14,7 @@
 
 #include "implicit_sim/core/base/format.h"
 #include "implicit_sim/core/io/scene_edit.h"
+#include "implicit_sim/core/model/joint_configuration.h"
 #include "implicit_sim/core/model/urdf_loader.h"
 #include "implicit_sim/core/step/step_health.h"
 #include "implicit_sim/ros/conversions.h"
@@ -36,6 +39,23 @@ Pose PoseFromMsg(const geometry_msgs::Pose& msg, std::string* error) {
   X.linear() = q.normalized().toRotationMatrix();
   X.translation() = p;
   return X;
+}
+
+// Names and values of a request as a map; false with *error for unequal lengths or a name given twice.
+bool NamedValues(const std::vector<std::string>& names, const std::vector<double>& values, const char* what,
+                 std::map<std::string, double>* out, std::string* error) {
+  if (names.size() != values.size()) {
+    *error = std::string(what) + ": " + std::to_string(names.size()) + " names but " + std::to_string(values.size()) +
+             " positions (need one per name)";
+    return false;
+  }
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (!out->emplace(names[i], values[i]).second) {
+      *error = std::string(what) + ": joint '" + names[i] + "' given twice";
+      return false;
+    }
+  }
+  return true;
 }
 
 }  // namespace
@@ -67,6 +87,9 @@ bool SimNode::OnSpawn(implicit_sim::Spawn::Request& req, implicit_sim::Spawn::Re
   addition.v_WO = conv::ToVec3(req.twist.linear);
   addition.w_WO = conv::ToVec3(req.twist.angular);
   if (error.empty() && (!addition.v_WO.allFinite() || !addition.w_WO.allFinite())) error = "twist must be finite";
+  if (error.empty()) NamedValues(req.joint_names, req.joint_positions, "joint_names", &addition.joint_positions, &error);
+  addition.self_collide = req.self_collide;
+  addition.srdf = req.srdf;
   if (error.empty()) ReadRequestedScene(params_, req.urdf, req.file, &addition_text, &error);
   if (!error.empty()) {
     res.success = false;
@@ -125,8 +148,15 @@ bool SimNode::OnLoadScene(implicit_sim::LoadScene::Request& req, implicit_sim::L
     res.message = error;
     return true;
   }
+  std::map<std::string, double> positions;
+  if (!NamedValues(req.joint_names, req.joint_positions, "joint_names", &positions, &error)) {
+    res.success = false;
+    res.message = error;
+    return true;
+  }
   std::unique_ptr<World> next;
   try {
+    scene.urdf = WithStartEntries(scene.urdf, positions, req.srdf);
     next = BuildWorld(params_, scene);  // off the physics thread: loading a large scene does not hold the steps up
   } catch (const std::exception& e) {
     res.success = false;
@@ -143,6 +173,49 @@ bool SimNode::OnLoadScene(implicit_sim::LoadScene::Request& req, implicit_sim::L
            res.success = true;
            res.message = "loaded scene '" + name + "' (" + std::to_string(moving) + " moving bodies) at t = " +
                          FormatNumber(SimTime()) + " s";
+         }) || ShuttingDownAnswer(res);
+}
+
+bool SimNode::OnSetJointPositions(implicit_sim::SetJointPositions::Request& req,
+                                  implicit_sim::SetJointPositions::Response& res) {
+  std::map<std::string, double> by_name;
+  std::string error;
+  if (!NamedValues(req.names, req.positions, "names", &by_name, &error)) {
+    res.success = false;
+    res.message = error;
+    return true;
+  }
+  return mailbox_.RunBetweenSteps([&] {
+           const Model& model = *world_->model;
+           std::map<int, double> positions;
+           for (const auto& [name, q] : by_name) {
+             const int j = model.FindJoint(name);
+             if (j < 0) {
+               res.success = false;
+               res.message = "unknown joint '" + name + "'";
+               return;
+             }
+             positions[j] = q;
+           }
+           State next = world_->state;
+           res.success = SetJointPositions(model, positions, &next, &error);
+           if (!res.success) {
+             res.message = error;
+             return;
+           }
+           std::string overlap;
+           Data check(model);
+           if (FindInitialOverlap(model, next, options_.overlap_tolerance, &check, &overlap)) {
+             res.success = false;
+             res.message = "refused: " + overlap + " (more than the overlap tolerance " +
+                           FormatNumber(options_.overlap_tolerance) + " m)";
+             return;
+           }
+           world_->state = next;
+           JournalUnreplayable("~set_joint_positions");
+           ClearWarmStart(world_->data.get());  // the next step starts cold from the new configuration
+           SaveSnapshot();
+           res.message = "set " + std::to_string(positions.size()) + " joints at t = " + FormatNumber(SimTime()) + " s";
          }) || ShuttingDownAnswer(res);
 }
 

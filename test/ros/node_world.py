@@ -8,7 +8,10 @@
 - a robot URDF (root link not world, a mesh collision) loads with its root welded to the world, /joint_states follows
   and robot_description holds its jointed part;
 - 100 spawn/delete cycles of a 10-body URDF: RSS after cycle 100 minus after cycle 10 below 2 MB, and the median service
-  latency of cycles 91-100 within 20 % of cycles 1-10 (the least of each window, paused: the calls' own cost)."""
+  latency of cycles 91-100 within 20 % of cycles 1-10 (the least of each window, paused: the calls' own cost);
+- the UR5 as published (test/data/vendor, on ROS_PACKAGE_PATH by node_world.test) spawns with start joint positions,
+  and ~set_joint_positions sets its configuration exactly or refuses (unknown joint, NaN, unequal lengths, an overlap
+  with the ground) changing nothing."""
 import os
 import statistics
 import struct
@@ -20,10 +23,10 @@ import xmlrpc.client
 import rosgraph
 import rospy
 import rostest
-from geometry_msgs.msg import Point, Pose, Quaternion, Twist, Vector3
+from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
 from implicit_sim.msg import BodyStates
 from implicit_sim.scene import Scene, Shape
-from implicit_sim.srv import Delete, GetBodyState, LoadScene, Spawn
+from implicit_sim.srv import Delete, GetBodyState, LoadScene, SetJointPositions, Spawn
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from tf2_msgs.msg import TFMessage
@@ -33,9 +36,10 @@ NODE = "/implicit_sim"
 SOURCE_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
-def call(name, srv_type, *args):
+def call(name, srv_type, *args, **fields):
+    """Positional arguments for short requests, keywords (the request's fields, the rest default) for long ones."""
     rospy.wait_for_service(NODE + "/" + name, timeout=10)
-    return rospy.ServiceProxy(NODE + "/" + name, srv_type)(*args)
+    return rospy.ServiceProxy(NODE + "/" + name, srv_type)(*args, **fields)
 
 
 def balls_urdf(n, spacing=0.15, height=0.5):
@@ -82,7 +86,7 @@ def write_box_stl(path, half):
 class NodeWorld(unittest.TestCase):
     def test_1_spawn_shows_the_bodies_and_refuses_clashes_and_overlaps(self):
         before = body_names()
-        res = call("spawn", Spawn, balls_urdf(3), "", "a_", pose(0.0, 1.0, 0.0), Twist(), False)
+        res = call("spawn", Spawn, urdf=balls_urdf(3), prefix="a_", pose=pose(0.0, 1.0, 0.0))
         self.assertTrue(res.success, res.message)
         self.assertEqual(list(res.bodies), ["a_ball0", "a_ball1", "a_ball2"])
         state = call("get_body_state", GetBodyState, "a_ball1").state
@@ -101,11 +105,11 @@ class NodeWorld(unittest.TestCase):
         sub.unregister()
         self.assertEqual(len(set(shapes)), len(before) + 3)
 
-        clash = call("spawn", Spawn, balls_urdf(1), "", "a_", pose(3.0, 3.0, 0.0), Twist(), False)
+        clash = call("spawn", Spawn, urdf=balls_urdf(1), prefix="a_", pose=pose(3.0, 3.0, 0.0))
         self.assertFalse(clash.success)
         self.assertIn("a_ball0", clash.message)
         cube = call("get_body_state", GetBodyState, "cube").state.pose.position
-        overlap = call("spawn", Spawn, balls_urdf(1), "", "b_", pose(cube.x, cube.y, cube.z - 0.5), Twist(), False)
+        overlap = call("spawn", Spawn, urdf=balls_urdf(1), prefix="b_", pose=pose(cube.x, cube.y, cube.z - 0.5))
         self.assertFalse(overlap.success)
         self.assertIn("overlap", overlap.message)
         self.assertEqual(len(body_names()), len(before) + 3)
@@ -124,10 +128,10 @@ class NodeWorld(unittest.TestCase):
 
     def test_3_a_bad_scene_is_refused_and_the_world_keeps_stepping(self):
         t0 = call("get_body_state", GetBodyState, "cube").message
-        bad = call("load_scene", LoadScene, "<robot name='x'><link name='world'/></robot>", "")
+        bad = call("load_scene", LoadScene, urdf="<robot name='x'><link name='world'/></robot>")
         self.assertFalse(bad.success)
         self.assertTrue(bad.message)
-        outside = call("load_scene", LoadScene, "", "/etc/passwd")
+        outside = call("load_scene", LoadScene, file="/etc/passwd")
         self.assertFalse(outside.success)
         self.assertIn("not a file under", outside.message)
         self.assertNotIn("root:", outside.message)
@@ -154,7 +158,7 @@ class NodeWorld(unittest.TestCase):
     <limit lower="-3" upper="3" effort="50" velocity="5"/>
   </joint>
 </robot>"""
-            res = call("load_scene", LoadScene, robot, "")
+            res = call("load_scene", LoadScene, urdf=robot)
             self.assertTrue(res.success, res.message)
         self.assertEqual(sorted(body_names()), ["base_link", "upper"])
         joints = rospy.wait_for_message("/joint_states", JointState, timeout=5)
@@ -166,7 +170,7 @@ class NodeWorld(unittest.TestCase):
         self.assertEqual((fixed.x, fixed.y, fixed.z), (0.0, 0.0, 0.0))
 
     def test_5_spawn_and_delete_cycles_leave_memory_flat_and_no_body_behind(self):
-        self.assertTrue(call("load_scene", LoadScene, "", "cube_drop").success)
+        self.assertTrue(call("load_scene", LoadScene, file="cube_drop").success)
         bodies_before = sorted(body_names())
         self.assertTrue(call("pause", Trigger).success)  # the services' own cost, not the wait for a step
         rospy.wait_for_service(NODE + "/spawn", timeout=10)
@@ -176,7 +180,7 @@ class NodeWorld(unittest.TestCase):
         latencies, rss = [], {}
         for cycle in range(1, 101):
             start = time.monotonic()
-            res = spawn(urdf, "", "c_", pose(1.0, 1.0, 0.0), Twist(), False)
+            res = spawn(urdf=urdf, prefix="c_", pose=pose(1.0, 1.0, 0.0))
             self.assertTrue(res.success, res.message)
             gone = delete(list(res.bodies))
             self.assertTrue(gone.success, gone.message)
@@ -197,6 +201,37 @@ class NodeWorld(unittest.TestCase):
         self.assertTrue(call("unpause", Trigger).success)
         self.assertEqual(sorted(body_names()), bodies_before)
 
+
+    @staticmethod
+    def joint_positions():
+        """The joints positions by name from a new subscriber (while paused: the latched current state)."""
+        msg = rospy.wait_for_message("/joint_states", JointState, timeout=5)
+        return dict(zip(msg.name, msg.position))
+
+    def test_6_a_vendor_arm_spawns_with_joint_positions_and_set_joint_positions_sets_them(self):
+        self.assertTrue(call("pause", Trigger).success)
+        res = call("spawn", Spawn, file="package://ur_description/urdf/ur5.urdf", prefix="ur/", pose=pose(2.0, 0.0, 0.3),
+                   joint_names=["shoulder_lift_joint", "elbow_joint"], joint_positions=[-1.2, 1.0])
+        self.assertTrue(res.success, res.message)
+        self.assertIn("ur/forearm_link", list(res.bodies))
+        q = self.joint_positions()
+        self.assertAlmostEqual(q["ur/shoulder_lift_joint"], -1.2, delta=1e-9)
+        self.assertAlmostEqual(q["ur/elbow_joint"], 1.0, delta=1e-9)
+        res = call("set_joint_positions", SetJointPositions, ["ur/elbow_joint", "ur/wrist_1_joint"], [0.5, -0.3])
+        self.assertTrue(res.success, res.message)
+        q = self.joint_positions()
+        for name, value in (("ur/elbow_joint", 0.5), ("ur/wrist_1_joint", -0.3), ("ur/shoulder_lift_joint", -1.2)):
+            self.assertAlmostEqual(q[name], value, delta=1e-9, msg=name)
+        refusals = ((["nope"], [0.0], "unknown joint 'nope'"),
+                    (["ur/elbow_joint"], [float("nan")], "joint 'ur/elbow_joint': position must be finite"),
+                    (["ur/elbow_joint"], [0.1, 0.2], "names: 1 names but 2 positions (need one per name)"),
+                    (["ur/shoulder_lift_joint", "ur/elbow_joint"], [1.5, 0.0], "overlap"))
+        for names, values, message in refusals:
+            res = call("set_joint_positions", SetJointPositions, names, values)
+            self.assertFalse(res.success, names)
+            self.assertIn(message, res.message)
+            self.assertEqual(self.joint_positions(), q)
+        self.assertTrue(call("unpause", Trigger).success)
 
 if __name__ == "__main__":
     rospy.init_node("node_world")

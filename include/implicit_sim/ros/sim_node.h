@@ -8,7 +8,7 @@
 // the snapshots the physics thread saves), NodeDiagnostics, LiveTuning (dynamic_reconfigure) and DragMarkers. What
 // the commands do to the world is in world_commands.h, how worlds are read and built in world.h. By concern:
 // sim_node.cpp (threads, stepping), node_jobs.cpp (~step, ~run_steps), node_services.cpp (services, the command
-// topics' one path and the journal's replay), node_world.cpp (~spawn, ~delete, ~load_scene).
+// topics' one path and the journal's replay), node_world.cpp (~spawn, ~delete, ~load_scene, ~set_joint_positions).
 #pragma once
 
 #include <atomic>
@@ -35,6 +35,7 @@
 #include "implicit_sim/RunStepsAction.h"
 #include "implicit_sim/SetBodyState.h"
 #include "implicit_sim/SetJointEfforts.h"
+#include "implicit_sim/SetJointPositions.h"
 #include "implicit_sim/Spawn.h"
 #include "implicit_sim/Step.h"
 #include "implicit_sim/core/step/options.h"
@@ -106,6 +107,8 @@ class SimNode {
   bool OnSpawn(implicit_sim::Spawn::Request& req, implicit_sim::Spawn::Response& res);
   bool OnDelete(implicit_sim::Delete::Request& req, implicit_sim::Delete::Response& res);
   bool OnLoadScene(implicit_sim::LoadScene::Request& req, implicit_sim::LoadScene::Response& res);
+  bool OnSetJointPositions(implicit_sim::SetJointPositions::Request& req,
+                           implicit_sim::SetJointPositions::Response& res);
   // node_jobs.cpp: ~step and ~run_steps.
   bool StartJob(uint64_t steps, uint64_t max_steps, std::string* refusal);  // physics thread
   bool OnStep(implicit_sim::Step::Request& req, implicit_sim::Step::Response& res);
