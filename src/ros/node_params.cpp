@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "implicit_sim/core/base/format.h"
+#include "implicit_sim/core/io/scene_edit.h"
 #include "implicit_sim/core/model/urdf_loader.h"
 
 namespace implicit_sim {
@@ -139,6 +140,14 @@ SceneText ReadNodeScene(const ros::NodeHandle& nh, const NodeParams& p) {
   std::string xml;
   if (!nh.getParam("robot_description", xml)) {
     throw std::invalid_argument("no scene: set ~scene (file path or scene name) or the robot_description parameter");
+  }
+  std::string srdf;  // MoveIt's semantic description beside it: its <disable_collisions> pairs never collide
+  if (nh.getParam("robot_description_semantic", srdf) && !srdf.empty()) {
+    try {
+      xml = WithStartEntries(xml, {}, srdf);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("parameter robot_description_semantic: " + std::string(e.what()));
+    }
   }
   return SceneText{xml, "robot_description", ""};
 }

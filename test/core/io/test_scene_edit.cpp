@@ -347,6 +347,27 @@ TEST(SceneEdit, SpawnTakesJointPositionsSelfCollideAndAnSrdf) {
   }
 }
 
+// ~load_scene's and robot_description_semantic's path: start positions and an SRDF on a whole scene.
+TEST(SceneEdit, WithStartEntriesSetsAScenesJointPositionsAndSrdfPairs) {
+  const std::string scene = ArmAsScene("fixed");
+  EXPECT_EQ(WithStartEntries(scene, {}, ""), scene);
+  const std::string srdf = "<robot name='arm'><disable_collisions link1='base' link2='forearm' reason='Never'/></robot>";
+  std::string text = WithStartEntries(scene, {{"elbow", 0.25}}, srdf);
+  text.replace(text.find("<implicit_sim>"), 14, "<implicit_sim><self_collide link='base'/>");
+  const Model m = LoadSceneFromString(text);
+  EXPECT_NEAR(JointPosition(m, State::Initial(m), m.FindJoint("elbow")), 0.25, 1e-12);
+  EXPECT_EQ(m.joints[m.FindJoint("shoulder")].applied_effort, 1.0);  // the scene's own entry is kept
+  const int base = m.FindBody("base"), fore = m.FindBody("forearm");
+  EXPECT_TRUE(std::binary_search(m.excluded_pairs.begin(), m.excluded_pairs.end(),
+                                 std::make_pair(std::min(base, fore), std::max(base, fore))));
+  try {
+    WithStartEntries(scene, {{"knee", 0.1}}, "");
+    ADD_FAILURE() << "an unknown joint was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "WithStartEntries: joint_positions: 'knee' is not a joint of the scene");
+  }
+}
+
 TEST(SceneEdit, RefusesANameClashNamingTheLinkOrJoint) {
   const std::string p3 = ReadScene("p3_sphere_on_two_spheres.urdf");
   SceneAddition a;
