@@ -52,6 +52,9 @@ LoaderOptions SceneLoaderOptions(const NodeParams& params, const std::string& me
   options.resolve_package_uri = ResolvePackageUri;
   options.mesh_directory = mesh_directory;
   options.warnings = warnings;
+  // One cache for the node's life: a world edit re-loads the scene, but hulls each mesh (and notes it) only once.
+  static const std::shared_ptr<MeshHullCache> hull_cache = std::make_shared<MeshHullCache>();
+  options.hull_cache = hull_cache;
   return options;
 }
 

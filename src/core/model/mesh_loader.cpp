@@ -2,6 +2,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <locale>
 #include <sstream>
@@ -76,6 +77,27 @@ std::string FormatLength(double metres) {
   return text.str();
 }
 
+// The cache key of a mesh file: its bytes' FNV-1a hash and size, the scale and the face cap.
+MeshHullCache::Key CacheKey(const std::string& path, const Vec3& scale, int max_faces) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) Fail("mesh file '" + path + "' cannot be opened");
+  MeshHullCache::Key key;
+  uint64_t hash = 1469598103934665603ull;
+  char buffer[1 << 16];
+  while (in.read(buffer, sizeof(buffer)) || in.gcount() > 0) {
+    for (std::streamsize i = 0; i < in.gcount(); ++i) {
+      hash = (hash ^ static_cast<unsigned char>(buffer[i])) * 1099511628211ull;
+    }
+    key.size += static_cast<uint64_t>(in.gcount());
+  }
+  key.content_hash = hash;
+  key.scale_x = scale.x();
+  key.scale_y = scale.y();
+  key.scale_z = scale.z();
+  key.max_faces = max_faces;
+  return key;
+}
+
 }  // namespace
 
 std::string ResolveMeshUri(const std::string& uri, const LoaderOptions& options) {
@@ -112,8 +134,18 @@ ConvexShape MeshHullShape(const std::string& link, const std::string& uri, const
                           const LoaderOptions& options, std::string* warning) {
   const std::string where = "link '" + link + "': collision mesh '" + uri + "'";
   ConvexHull hull;
+  MeshHullCache::Key key;
   try {
-    std::vector<Vec3> vertices = ReadMeshVertices(ResolveMeshUri(uri, options));
+    const std::string path = ResolveMeshUri(uri, options);
+    if (options.hull_cache) {
+      key = CacheKey(path, scale, options.max_hull_faces);
+      ConvexShape cached;
+      if (options.hull_cache->Find(key, &cached)) {
+        warning->clear();
+        return cached;
+      }
+    }
+    std::vector<Vec3> vertices = ReadMeshVertices(path);
     for (Vec3& v : vertices) v = v.cwiseProduct(scale);
     hull = ComputeConvexHull(vertices, options.max_hull_faces);
   } catch (const std::invalid_argument& e) {
@@ -138,6 +170,7 @@ ConvexShape MeshHullShape(const std::string& link, const std::string& uri, const
                 FormatLength(hull.merge_radius) + " m, cap " + std::to_string(options.max_hull_faces);
   }
   *warning += ")";
+  if (options.hull_cache) options.hull_cache->Insert(key, shape);
   return shape;
 }
 

@@ -97,7 +97,7 @@ ConvexShape ReadShape(const std::string& link, const urdf::Collision& collision,
     std::string warning;
     ConvexShape hull =
         MeshHullShape(link, mesh->filename, Vec3(mesh->scale.x, mesh->scale.y, mesh->scale.z), options, &warning);
-    notes->Add("mesh/" + link + "/" + mesh->filename, warning);
+    if (!warning.empty()) notes->Add("mesh/" + link + "/" + mesh->filename, warning);  // empty: a cached hull
     return hull;
   }
   const char* type_text = implicit->Attribute("type");

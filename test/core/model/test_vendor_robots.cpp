@@ -2,9 +2,16 @@
 // ur5.xacro and frankaemika/franka_ros's panda.urdf.xacro, with their collision meshes), loaded unedited: the UR5
 // (+-2 pi joints, 7 STL hulls), the Panda without <inertial> (several collisions per link, mimic fingers, franka's
 // <dynamics D K>) and the Panda with gazebo:=true. Each is held at a pose by PD drives for 1 s with every step
-// converged; the second finger is the first's mimic follower.
+// converged; the second finger is the first's mimic follower. Also a robot's configuration set by joint positions
+// (model/joint_configuration.h) and the hull cache of repeated loads.
+#include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -170,6 +177,84 @@ TEST(VendorRobots, SetJointPositionsPlacesThePandaExactly) {
     EXPECT_FALSE(SetJointPositions(model, {{fixed, 0.0}}, &state, &error));
     EXPECT_EQ(error, "joint 'panda_joint8' is fixed: it has no position to set");
   }
+}
+
+// A hull cache (LoaderOptions::hull_cache, what the node's world edits use): the second load of the Panda reads every
+// hull from the cache, adds no hull note and gives the same model, shape for shape; an edited mesh file (other bytes
+// under the same name) and another scale are hulled again.
+TEST(VendorRobots, AHullCacheHullsEachMeshOnceByContent) {
+  LoaderOptions options;
+  options.resolve_package_uri = [](const std::string& uri) {
+    return kVendorDir + "/" + uri.substr(std::string("package://").size());
+  };
+  options.joint_positions = {{"panda_joint4", -2.356}};
+  options.hull_cache = std::make_shared<MeshHullCache>();
+  std::vector<std::string> first_notes, second_notes;
+  auto hull_notes = [](const std::vector<std::string>& notes) {
+    int n = 0;
+    for (const std::string& note : notes) n += note.find("replaced by its convex hull") != std::string::npos;
+    return n;
+  };
+  const std::string file = kVendorDir + "/franka_description/robots/panda_gazebo.urdf";
+  options.warnings = &first_notes;
+  const auto start = std::chrono::steady_clock::now();
+  const Model first = LoadSceneFromFile(file, options);
+  const auto middle = std::chrono::steady_clock::now();
+  const size_t hulled = options.hull_cache->misses();
+  EXPECT_GT(hulled, 5u);
+  EXPECT_EQ(hull_notes(first_notes), static_cast<int>(hulled));
+  options.warnings = &second_notes;
+  const Model second = LoadSceneFromFile(file, options);
+  const auto end = std::chrono::steady_clock::now();
+  std::printf("[ INFO ] Panda load: %.1f ms hulling %zu meshes, %.1f ms with every hull cached (printed, never "
+              "asserted)\n", std::chrono::duration<double, std::milli>(middle - start).count(), hulled,
+              std::chrono::duration<double, std::milli>(end - middle).count());
+  EXPECT_EQ(options.hull_cache->misses(), hulled);
+  EXPECT_GE(options.hull_cache->hits(), hulled);
+  EXPECT_EQ(hull_notes(second_notes), 0);
+  ASSERT_EQ(first.bodies.size(), second.bodies.size());
+  for (size_t b = 0; b < first.bodies.size(); ++b) {
+    ASSERT_EQ(first.bodies[b].shapes.size(), second.bodies[b].shapes.size());
+    for (size_t k = 0; k < first.bodies[b].shapes.size(); ++k) {
+      const ConvexShape &a = first.bodies[b].shapes[k], &c = second.bodies[b].shapes[k];
+      EXPECT_EQ(a.vertices, c.vertices) << first.bodies[b].name;
+      EXPECT_TRUE(a.X_BS.isApprox(c.X_BS, 0.0)) << first.bodies[b].name;
+    }
+  }
+  // Same name, other bytes; and another scale: both hulled again.
+  const std::string dir = ::testing::TempDir() + "/hull_cache";
+  std::filesystem::create_directories(dir);
+  auto write_box = [&](double half) {
+    std::ofstream out(dir + "/part.obj");
+    for (int i = 0; i < 8; ++i) {
+      out << "v " << (i & 1 ? half : -half) << " " << (i & 2 ? half : -half) << " " << (i & 4 ? half : -half) << "\n";
+    }
+    out << "f 1 2 4\nf 1 4 3\nf 5 7 8\nf 5 8 6\nf 1 5 6\nf 1 6 2\nf 3 4 8\nf 3 8 7\nf 1 3 7\nf 1 7 5\nf 2 6 8\nf 2 8 4\n";
+  };
+  auto box_scene = [&](double scale) {
+    return "<robot name='p'><link name='world'/><link name='part'><inertial><mass value='1'/><inertia ixx='0.01' "
+           "iyy='0.01' izz='0.01' ixy='0' ixz='0' iyz='0'/></inertial><collision><geometry><mesh filename='" +
+           dir + "/part.obj' scale='" + std::to_string(scale) + " 1 1'/></geometry></collision></link><joint name='j' "
+           "type='floating'><parent link='world'/><child link='part'/><origin xyz='0 0 1'/></joint></robot>";
+  };
+  auto half_width = [](const Model& m) {
+    double x = 0.0;
+    for (const Vec3& v : m.bodies[m.FindBody("part")].shapes[0].vertices) x = std::max(x, v.x());
+    return x;
+  };
+  LoaderOptions small;
+  std::vector<std::string> small_notes;
+  small.warnings = &small_notes;
+  small.hull_cache = std::make_shared<MeshHullCache>();
+  write_box(0.1);
+  EXPECT_NEAR(half_width(LoadSceneFromString(box_scene(1.0), "p", small)), 0.1, 1e-6);
+  write_box(0.2);
+  EXPECT_NEAR(half_width(LoadSceneFromString(box_scene(1.0), "p", small)), 0.2, 1e-6);
+  EXPECT_NEAR(half_width(LoadSceneFromString(box_scene(2.0), "p", small)), 0.4, 1e-6);
+  EXPECT_NEAR(half_width(LoadSceneFromString(box_scene(1.0), "p", small)), 0.2, 1e-6);
+  EXPECT_EQ(small.hull_cache->misses(), 3u);
+  EXPECT_EQ(small.hull_cache->hits(), 1u);
+  EXPECT_EQ(hull_notes(small_notes), 3);
 }
 
 }  // namespace

@@ -14,9 +14,11 @@
 
 #include <functional>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "implicit_sim/core/model/mesh_hull_cache.h"
 #include "implicit_sim/core/model/model.h"
 
 namespace implicit_sim {
@@ -35,6 +37,9 @@ struct LoaderOptions {
   // A mesh hull with more faces is simplified by merging nearly coplanar facets until it has at most this many: each
   // face is one inequality, hence one multiplier per contact in the step NCP. Range [4, 10000].
   int max_hull_faces = 64;
+  // Hulls computed before, reused by file content, scale and max_hull_faces; a reused hull adds no note. Null: every
+  // mesh is read and hulled.
+  std::shared_ptr<MeshHullCache> hull_cache;
   // Start positions (rad or m) of joints by name, over the scene's <implicit_sim><joint position>: each joint must be
   // revolute, continuous or prismatic, not a mimic follower, and the position within its limits (give or take
   // kJointLimitRoundOff). A limited joint given no start anywhere starts at 0, which must then lie within its limits.
