@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include <assimp/Importer.hpp>
+#include <assimp/commonMetaData.h>
 #include <assimp/scene.h>
 
 #include "geometry/convex_hull.h"
@@ -125,8 +126,17 @@ std::vector<Vec3> ReadMeshVertices(const std::string& path) {
     Fail("mesh file '" + path + "' cannot be read (" +
          (scene ? std::string("no mesh in it") : std::string(importer.GetErrorString())) + ")");
   }
+  // Assimp puts a Collada file's <unit meter> and its <up_axis> into the root node: the file's up axis becomes +y.
+  // URDF frames have +z up, so a Collada scene is turned back by +90 deg about x (y up -> z up); a Z_UP file's
+  // coordinates then come out as written, a Y_UP (or X_UP) file's up axis becomes +z, and units become metres.
+  aiMatrix4x4 X_MR;  // the mesh frame M from assimp's root frame R
+  aiString format;
+  if (scene->mMetaData && scene->mMetaData->Get(AI_METADATA_SOURCE_FORMAT, format) &&
+      std::string(format.C_Str()).rfind("Collada", 0) == 0) {
+    X_MR = aiMatrix4x4(1, 0, 0, 0,  0, 0, -1, 0,  0, 1, 0, 0,  0, 0, 0, 1);  // exact: (x, y, z) -> (x, -z, y)
+  }
   std::vector<Vec3> vertices;
-  CollectVertices(*scene, *scene->mRootNode, aiMatrix4x4(), &vertices);
+  CollectVertices(*scene, *scene->mRootNode, X_MR, &vertices);
   return vertices;
 }
 

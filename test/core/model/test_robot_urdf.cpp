@@ -90,6 +90,30 @@ void WriteObj(const std::string& path, const std::vector<Vec3>& vertices, const 
   }
 }
 
+// A Collada box: the corners (given in a z-up frame, m) written in the file's axes and units, under a node that
+// translates by `node_offset` (file axes and units). Y_UP files hold (x, z, -y) of a z-up point.
+void WriteBoxDae(const std::string& path, const std::vector<Vec3>& corners, const std::string& up_axis,
+                 double unit_m, const Vec3& node_offset = Vec3::Zero()) {
+  std::ofstream out(path);
+  out.precision(17);
+  out << "<?xml version='1.0'?>\n<COLLADA xmlns='http://www.collada.org/2005/11/COLLADASchema' version='1.4.1'>"
+      << "<asset><unit meter='" << unit_m << "'/><up_axis>" << up_axis << "</up_axis></asset>"
+      << "<library_geometries><geometry id='box'><mesh><source id='box-p'><float_array id='box-a' count='24'>";
+  for (const Vec3& c : corners) {
+    const Vec3 file = (up_axis == "Y_UP" ? Vec3(c.x(), c.z(), -c.y()) : c) / unit_m - node_offset;
+    out << file.x() << " " << file.y() << " " << file.z() << " ";
+  }
+  out << "</float_array><technique_common><accessor source='#box-a' count='8' stride='3'><param name='X' "
+      << "type='float'/><param name='Y' type='float'/><param name='Z' type='float'/></accessor></technique_common>"
+      << "</source><vertices id='box-v'><input semantic='POSITION' source='#box-p'/></vertices><triangles count='12'>"
+      << "<input semantic='VERTEX' source='#box-v' offset='0'/><p>";
+  for (const auto& triangle : kBoxTriangles) out << triangle[0] << " " << triangle[1] << " " << triangle[2] << " ";
+  out << "</p></triangles></mesh></geometry></library_geometries><library_visual_scenes><visual_scene id='s'>"
+      << "<node id='n'><translate>" << node_offset.x() << " " << node_offset.y() << " " << node_offset.z()
+      << "</translate><instance_geometry url='#box'/></node></visual_scene></library_visual_scenes>"
+      << "<scene><instance_visual_scene url='#s'/></scene></COLLADA>\n";
+}
+
 std::vector<Vec3> OctahedronVertices() {
   return {Vec3(0.1, 0, 0), Vec3(-0.1, 0, 0), Vec3(0, 0.1, 0), Vec3(0, -0.1, 0), Vec3(0, 0, 0.1), Vec3(0, 0, -0.1)};
 }
@@ -260,6 +284,41 @@ TEST_F(RobotUrdf, AsciiStlObjOctahedronAndPrismHullsHaveTheirFaceCounts) {
   ASSERT_EQ(warnings_.size(), 1u);
   EXPECT_NE(warnings_[0].find("link 'arm'"), std::string::npos);
   EXPECT_NE(warnings_[0].find("(8 faces)"), std::string::npos);
+}
+
+// Assimp turns a Collada file's up axis into +y and scales it to metres in its root node; URDF links have +z up.
+TEST_F(RobotUrdf, ColladaBoxesWithZOrYUpInAnyUnitHullAsTheStlBoxAtTheirCollisionOrigin) {
+  WriteBoxDae(dir_ + "/box_z_up.dae", BoxCorners(kHalf, kCentre), "Z_UP", 1.0);
+  WriteBoxDae(dir_ + "/box_y_up.dae", BoxCorners(kHalf, kCentre), "Y_UP", 0.25, Vec3(0.5, -1.0, 0.25));
+  WriteBoxDae(dir_ + "/box_y_up_mm.dae", BoxCorners(kHalf, kCentre), "Y_UP", 0.001, Vec3(100, 20, -30));
+  const Model z_up = Load(Robot("box_z_up.dae"));
+  EXPECT_EQ(ExpectHullOfVertices(z_up.bodies[z_up.FindBody("arm")], BoxCorners(kHalf, kCentre)), 6);
+  const Model y_up = Load(Robot("box_y_up.dae"));  // a quarter-metre unit: every coordinate stays exact
+  EXPECT_EQ(ExpectHullOfVertices(y_up.bodies[y_up.FindBody("arm")], BoxCorners(kHalf, kCentre)), 6);
+
+  // Under a collision origin, each file's hull has the STL hull's support values (mm: float round-off).
+  const auto link = [](const std::string& mesh) {
+    return "<robot name='r'><link name='base'/><link name='arm'>" + std::string(kArmInertial) +
+           "<collision><origin xyz='0.1 -0.2 0.3' rpy='0.4 -0.5 0.6'/><geometry><mesh filename='" + mesh +
+           "'/></geometry></collision></link><joint name='j' type='continuous'><parent link='base'/>"
+           "<child link='arm'/><axis xyz='0 0 1'/></joint></robot>";
+  };
+  const Model stl = Load(link("box_binary.stl"));
+  const Body& reference = stl.bodies[stl.FindBody("arm")];
+  for (const std::string mesh : {"box_z_up.dae", "box_y_up.dae", "box_y_up_mm.dae"}) {
+    const Model dae = Load(link(mesh));
+    const Body& arm = dae.bodies[dae.FindBody("arm")];
+    ASSERT_EQ(arm.shapes.size(), 1u);
+    for (int k = 0; k < 27; ++k) {  // the 26 directions to the cells around a cube's centre
+      const Vec3 direction(k % 3 - 1.0, (k / 3) % 3 - 1.0, k / 9 - 1.0);
+      if (direction.isZero()) continue;
+      Vec3 p_expected, p_actual;
+      ASSERT_TRUE(SupportPoint(reference.shapes[0], reference.X_WB0, direction, &p_expected));
+      ASSERT_TRUE(SupportPoint(arm.shapes[0], arm.X_WB0, direction, &p_actual));
+      EXPECT_NEAR(direction.dot(p_actual), direction.dot(p_expected), mesh == "box_y_up_mm.dae" ? 1e-6 : 1e-12)
+          << mesh << " along " << direction.transpose();
+    }
+  }
 }
 
 TEST_F(RobotUrdf, ScaleAndPackageUriThroughRosPackagePathAndTheResolver) {
