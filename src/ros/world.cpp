@@ -1,6 +1,8 @@
 #include "implicit_sim/ros/world.h"
 
 #include <filesystem>
+#include <mutex>
+#include <set>
 
 #include <ros/console.h>
 #include <ros/package.h>
@@ -56,6 +58,17 @@ LoaderOptions SceneLoaderOptions(const NodeParams& params, const std::string& me
   static const std::shared_ptr<MeshHullCache> hull_cache = std::make_shared<MeshHullCache>();
   options.hull_cache = hull_cache;
   return options;
+}
+
+// Every world edit re-loads the whole scene: a loader note (a robot's self-overlap, a vendor attribute) is logged the
+// first time only, for the node's life.
+void LogNewWarnings(const std::vector<std::string>& warnings) {
+  static std::mutex mutex;
+  static std::set<std::string> logged;
+  const std::lock_guard<std::mutex> lock(mutex);
+  for (const std::string& warning : warnings) {
+    if (logged.insert(warning).second) ROS_WARN("%s", warning.c_str());
+  }
 }
 
 // The state and commands of the bodies and joints `to` shares with `from`, by name.
@@ -145,7 +158,7 @@ std::unique_ptr<World> BuildWorld(const NodeParams& params, const SceneText& sce
   std::vector<std::string> warnings;
   auto model = std::make_shared<const Model>(
       LoadSceneFromString(scene.urdf, scene.name, SceneLoaderOptions(params, scene.dir, &warnings)));
-  for (const std::string& warning : warnings) ROS_WARN("%s", warning.c_str());
+  LogNewWarnings(warnings);
   CheckWorldFrame(*model, params.world_frame);
   auto world = std::make_unique<World>(std::move(model));
   world->urdf = scene.urdf;

@@ -68,6 +68,33 @@ bool SupportPointInShapeFrame(const ConvexShape& shape, const Vec3& u, Vec3* p) 
   }
 }
 
+// max { u . x : x in the posed shape } (m): the closed-form support point, else the oracle's support value.
+double Support(const ConvexShape& shape, const Pose& X_WB, const Vec3& u_W) {
+  Vec3 p_W;
+  return SupportPoint(shape, X_WB, u_W, &p_W) ? u_W.dot(p_W) : SupportValue(shape, X_WB, u_W);
+}
+
+// support1(-n) + support2(n) (m): how far body 1 must move along the unit n (pointing from body 2 towards body 1) to
+// clear body 2. Its positive part bounds the penetration depth from above for any n; a negative value is a
+// separation along n.
+double CrossingAlong(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2, const Pose& X_WB2,
+                     const Vec3& n_W) {
+  return Support(shape1, X_WB1, -n_W) + Support(shape2, X_WB2, n_W);
+}
+
+// c(n) at the normals of both bodies at the distance oracle's closest points, the smaller (m). The oracle's distance
+// alone does not decide: it reports overlapping bodies at about its own tolerance, not 0; for bodies it finds apart
+// the normals give about minus their distance.
+double OracleCrossing(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2, const Pose& X_WB2) {
+  const ClosestPointsResult cp = ComputeClosestPoints(shape1, X_WB1, shape2, X_WB2);
+  Vec3 n1_W = -Vec3::UnitZ(), n2_W = Vec3::UnitZ();
+  double grad_norm;
+  MostActiveInequality(shape1, X_WB1, cp.p_W1, &n1_W, &grad_norm);
+  MostActiveInequality(shape2, X_WB2, cp.p_W2, &n2_W, &grad_norm);
+  return std::min(CrossingAlong(shape1, X_WB1, shape2, X_WB2, n2_W),
+                  CrossingAlong(shape1, X_WB1, shape2, X_WB2, -n1_W));
+}
+
 }  // namespace
 
 bool SupportPoint(const ConvexShape& shape, const Pose& X_WB, const Vec3& u_W, Vec3* p_W) {
@@ -249,6 +276,15 @@ void SeedNormalConeMultipliers(const ConvexShape& shape, const Pose& X_WB, const
     return;
   }
   for (int i = 0; i < best_size; ++i) multipliers[index[best_set[i]]] = best_m[i];
+}
+
+double PenetrationBound(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2, const Pose& X_WB2,
+                        double tolerance) {
+  ClosestPointsResult cp;
+  if (ClosedFormClosestPoints(shape1, X_WB1, shape2, X_WB2, &cp)) return std::max(0.0, -cp.distance);
+  const double descent = DescendCrossing(shape1, X_WB1, shape2, X_WB2, -tolerance, 200).value;
+  if (descent <= tolerance) return std::max(0.0, descent);
+  return std::max(0.0, std::min(descent, OracleCrossing(shape1, X_WB1, shape2, X_WB2)));
 }
 
 }  // namespace implicit_sim

@@ -1,6 +1,9 @@
 #include "self_collision.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <iterator>
 #include <map>
 #include <numeric>
 #include <set>
@@ -8,6 +11,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "implicit_sim/core/geometry/support.h"
 #include "loader_util.h"
 
 namespace implicit_sim {
@@ -51,7 +55,7 @@ std::string RequireLink(const tinyxml2::XMLElement* e, const char* attribute, co
 
 }  // namespace
 
-void ExcludeSelfCollisions(const tinyxml2::XMLElement* sim, const urdf::ModelInterface& urdf, Model* model) {
+std::vector<std::pair<int, int>> ExcludeSelfCollisions(const tinyxml2::XMLElement* sim, const urdf::ModelInterface& urdf, Model* model) {
   const LinkBodies bodies(urdf, *model);
   const int n = static_cast<int>(model->bodies.size());
   std::vector<int> robot(n);
@@ -77,16 +81,80 @@ void ExcludeSelfCollisions(const tinyxml2::XMLElement* sim, const urdf::ModelInt
       if (a >= 0 && b >= 0 && a != b) excluded.emplace_back(std::min(a, b), std::max(a, b));
     }
   }
+  std::sort(excluded.begin(), excluded.end());
+  excluded.erase(std::unique(excluded.begin(), excluded.end()), excluded.end());
+  std::vector<std::pair<int, int>> not_self_colliding;  // ascending: bodies are visited in order
   std::map<int, std::vector<int>> members;  // robot root -> its bodies, ascending
   for (int b = 0; b < n; ++b) members[Root(&robot, b)].push_back(b);
   for (const auto& [root, list] : members) {
     if (list.size() < 2 || self_colliding.count(root)) continue;
     for (size_t i = 0; i < list.size(); ++i) {
-      for (size_t j = i + 1; j < list.size(); ++j) excluded.emplace_back(list[i], list[j]);
+      for (size_t j = i + 1; j < list.size(); ++j) {
+        const std::pair<int, int> pair(list[i], list[j]);
+        if (!std::binary_search(excluded.begin(), excluded.end(), pair)) not_self_colliding.push_back(pair);
+      }
     }
   }
-  std::sort(excluded.begin(), excluded.end());
-  excluded.erase(std::unique(excluded.begin(), excluded.end()), excluded.end());
+  std::sort(not_self_colliding.begin(), not_self_colliding.end());
+  std::vector<std::pair<int, int>> merged;
+  std::merge(excluded.begin(), excluded.end(), not_self_colliding.begin(), not_self_colliding.end(),
+             std::back_inserter(merged));
+  excluded = std::move(merged);
+  return not_self_colliding;
+}
+
+std::string SelfOverlapNote(const Model& model, const std::vector<std::pair<int, int>>& not_self_colliding) {
+  constexpr double kReportedDepth = 1e-6;  // m: deeper than the round-off of hulls that touch
+  constexpr size_t kNamed = 8;             // pairs named in the line; the rest are counted
+  // Rigid groups: bodies welded by fixed joints, and every fixed body (welded to the world). Neighbours are groups
+  // that a moving joint joins; they meet at their joint, as MoveIt's "Adjacent" pairs do, and are not reported.
+  const int n = static_cast<int>(model.bodies.size());
+  std::vector<int> group(n);
+  std::iota(group.begin(), group.end(), 0);
+  int world = -1;
+  for (int b = 0; b < n; ++b) {
+    if (!model.bodies[b].is_fixed) continue;
+    if (world < 0) world = b;
+    group[Root(&group, b)] = Root(&group, world);
+  }
+  for (const Joint& joint : model.joints) {
+    if (joint.type == JointType::kFixed) group[Root(&group, joint.parent)] = Root(&group, joint.child);
+  }
+  std::set<std::pair<int, int>> neighbours;
+  for (const Joint& joint : model.joints) {
+    const int a = Root(&group, joint.parent), b = Root(&group, joint.child);
+    neighbours.emplace(std::min(a, b), std::max(a, b));
+  }
+  std::vector<std::string> overlapping;
+  for (const auto& [i, j] : not_self_colliding) {
+    const int gi = Root(&group, i), gj = Root(&group, j);
+    if (gi == gj || neighbours.count({std::min(gi, gj), std::max(gi, gj)})) continue;
+    const Body &a = model.bodies[i], &b = model.bodies[j];
+    double depth = 0.0;
+    for (const ConvexShape& shape_a : a.shapes) {
+      for (const ConvexShape& shape_b : b.shapes) {
+        const Vec3 p_WA = a.X_WB0 * shape_a.X_BS.translation(), p_WB = b.X_WB0 * shape_b.X_BS.translation();
+        if ((p_WA - p_WB).norm() > shape_a.BoundingRadius() + shape_b.BoundingRadius()) continue;
+        // A stationary least crossing is the depth of a note; the oracle's bound only where the descent stalls.
+        const CrossingDescent descent = DescendCrossing(shape_a, a.X_WB0, shape_b, b.X_WB0, -kReportedDepth, 200);
+        if (descent.value < -kReportedDepth) continue;  // certified apart
+        depth = std::max(depth, descent.stationary && std::isfinite(descent.value)
+                                    ? descent.value
+                                    : PenetrationBound(shape_a, a.X_WB0, shape_b, b.X_WB0, kReportedDepth));
+      }
+    }
+    if (depth <= kReportedDepth) continue;
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.3g", depth);
+    overlapping.push_back("'" + a.name + "'-'" + b.name + "' (" + text + " m)");
+  }
+  if (overlapping.empty()) return "";
+  std::string line = "implicit_sim: " + std::to_string(overlapping.size()) +
+                     " pairs of links that no joint joins overlap at their robot's start pose, by up to (they do not "
+                     "collide: the robot's self-collision is off):";
+  for (size_t k = 0; k < std::min(kNamed, overlapping.size()); ++k) line += (k ? ", " : " ") + overlapping[k];
+  if (overlapping.size() > kNamed) line += " and " + std::to_string(overlapping.size() - kNamed) + " more";
+  return line;
 }
 
 }  // namespace loader

@@ -550,7 +550,7 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
     }
   }
   BuildJoints(*urdf_model, joint_starts, placement, &model, &notes);
-  ExcludeSelfCollisions(sim, *urdf_model, &model);
+  const std::vector<std::pair<int, int>> not_self_colliding = ExcludeSelfCollisions(sim, *urdf_model, &model);
   model.Finalize([&](int i, int j) {
     for (const auto& key : {std::make_pair(model.bodies[i].name, model.bodies[j].name),
                             std::make_pair(model.bodies[j].name, model.bodies[i].name)}) {
@@ -560,6 +560,8 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
     return default_friction;
   });
   if (model.moving_bodies.empty()) Fail("scene '" + scene_name + "': no moving body (use a 'floating' joint)");
+  const std::string self_overlap = SelfOverlapNote(model, not_self_colliding);
+  if (!self_overlap.empty()) notes.Add("self_overlap", self_overlap);
   if (!from_density.empty()) {
     std::string names;
     for (const std::string& link : from_density) names += (names.empty() ? "'" : ", '") + link + "'";

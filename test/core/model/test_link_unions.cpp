@@ -11,6 +11,7 @@
 
 #include "implicit_sim/core/model/joints.h"
 #include "implicit_sim/core/model/urdf_loader.h"
+#include "implicit_sim/core/step/step_health.h"
 #include "scenario_runner.h"
 
 namespace implicit_sim {
@@ -197,9 +198,9 @@ TEST(VendorTolerance, ADriveTargetWithinRoundOffOfALimitIsOnIt) {
 namespace implicit_sim {
 namespace {
 
-// A two-link arm on a base welded to the world whose forearm folds back into the base at the start pose, with `sim` inside
-// <implicit_sim>.
-std::string FoldedArm(const std::string& sim) {
+// A two-link arm on a base welded to the world whose forearm folds back onto the base at the start pose (into it by
+// 0.5 - elbow_z m when the elbow is lower than 0.5 m), with `sim` inside <implicit_sim>.
+std::string FoldedArm(const std::string& sim, const std::string& elbow_z = "0.5") {
   const std::string inertial =
       "<inertial><mass value='1'/><inertia ixx='0.01' iyy='0.01' izz='0.01' ixy='0' ixz='0' iyz='0'/></inertial>";
   return "<robot name='arm'><link name='world'/><link name='base'><collision><geometry><box size='0.2 0.2 0.2'/>"
@@ -210,7 +211,7 @@ std::string FoldedArm(const std::string& sim) {
          "<axis xyz='0 1 0'/><limit lower='-3' upper='3' effort='10' velocity='1'/></joint>"
          "<link name='fore'>" + inertial +
          "<collision><origin xyz='0 0 0.25'/><geometry><box size='0.05 0.05 0.5'/></geometry></collision></link>"
-         "<joint name='elbow' type='revolute'><parent link='upper'/><child link='fore'/><origin xyz='0 0 0.5' "
+         "<joint name='elbow' type='revolute'><parent link='upper'/><child link='fore'/><origin xyz='0 0 " + elbow_z + "' "
          "rpy='0 3.14159 0'/><axis xyz='0 1 0'/><limit lower='-3' upper='3' effort='10' velocity='1'/></joint>"
          "<link name='ball'>" + inertial + "<collision><geometry><sphere radius='0.05'/></geometry></collision></link>"
          "<joint name='ball_joint' type='floating'><parent link='world'/><child link='ball'/>"
@@ -239,6 +240,38 @@ TEST(SelfCollision, OneRobotsLinksMeetOnlyWhenAskedAndNeverAcrossADisabledPair) 
       EXPECT_NE(std::string(e.what()).find("must name a link of the scene"), std::string::npos) << e.what();
     }
   }
+}
+
+// Self-collision off: links that no joint joins but overlap at the start pose are named in one note, not refused.
+TEST(SelfCollision, OverlapsOfARobotWithoutSelfCollisionAreNotedInOneLine) {
+  const auto notes_of = [](const std::string& sim, const std::string& elbow_z) {
+    std::vector<std::string> notes;
+    LoaderOptions options;
+    options.warnings = &notes;
+    LoadSceneFromString(FoldedArm(sim, elbow_z), "arm", options);
+    std::vector<std::string> overlaps;
+    for (const std::string& note : notes) {
+      if (note.find("overlap at their robot's start pose") != std::string::npos) overlaps.push_back(note);
+    }
+    return overlaps;
+  };
+  // The forearm reaches 0.05 m into the base (lifting it out is shorter than sliding it out sideways, 0.125 m). The
+  // upper arm and the forearm fill the same space, but the elbow joins them.
+  const std::vector<std::string> folded = notes_of("", "0.45");
+  ASSERT_EQ(folded.size(), 1u);
+  EXPECT_NE(folded[0].find("1 pairs of links"), std::string::npos) << folded[0];
+  EXPECT_NE(folded[0].find("'base'-'fore' (0.05 m)"), std::string::npos) << folded[0];
+  EXPECT_EQ(folded[0].find("'upper'"), std::string::npos) << folded[0];
+  EXPECT_TRUE(notes_of("", "0.5").empty());  // resting on the base, 1e-7 m deep by the 3.14159 rad fold: no note
+  EXPECT_TRUE(notes_of("<disable_collisions link1='fore' link2='base' reason='Default'/>", "0.45").empty());
+  // Self-collision on: the pair collides, and the stepper's overlap check refuses such a start; no note.
+  const std::vector<std::string> self = notes_of("<self_collide link='base'/>", "0.45");
+  EXPECT_TRUE(self.empty());
+  const Model model = LoadSceneFromString(FoldedArm("<self_collide link='base'/>", "0.45"), "arm");
+  Data data(model);
+  std::string detail;
+  EXPECT_TRUE(FindInitialOverlap(model, State::Initial(model), 1e-6, &data, &detail));
+  EXPECT_NE(detail.find("base"), std::string::npos) << detail;
 }
 
 }  // namespace

@@ -42,6 +42,12 @@ bool DescentClosestPoints(const ConvexShape& shape1, const Pose& X_WB1, const Co
 ClosestPointsResult FindClosestPoints(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2,
                                       const Pose& X_WB2);
 
+// An upper bound on how deep two posed shapes overlap (m; 0 when they are apart): the closed form where there is one,
+// else the least crossing found by DescendCrossing, stopped once it certifies an overlap of at most `tolerance`, and
+// beyond that the smaller of it and the crossing along the distance oracle's normals.
+double PenetrationBound(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2, const Pose& X_WB2,
+                        double tolerance);
+
 // The index of the inequality of `shape` (posed by X_WB) that is largest at p_W, its unit outward normal (world)
 // and the norm of its gradient there.
 int MostActiveInequality(const ConvexShape& shape, const Pose& X_WB, const Vec3& p_W, Vec3* normal_W,
