@@ -193,14 +193,21 @@ std::vector<geometry_msgs::TransformStamped> ToLinkTransforms(const Model& model
                                                               const std::vector<char>& on_tf, const ros::Time& stamp,
                                                               const std::string& world_frame) {
   std::vector<geometry_msgs::TransformStamped> transforms;
-  for (int b : model.moving_bodies) {
-    if (!on_tf[b]) continue;
+  const auto add = [&](const std::string& link, const Pose& X_WL) {
     geometry_msgs::TransformStamped t;
     t.header.stamp = stamp;
     t.header.frame_id = world_frame;
-    t.child_frame_id = model.bodies[b].name;
-    t.transform = ToTransformMsg(state.X_WL(model, b));
+    t.child_frame_id = link;
+    t.transform = ToTransformMsg(X_WL);
     transforms.push_back(t);
+  };
+  for (int b : model.moving_bodies) {
+    if (on_tf[b]) add(model.bodies[b].name, state.X_WL(model, b));
+  }
+  const size_t frames_start = model.bodies.size();
+  for (size_t f = 0; f < model.frames.size(); ++f) {
+    const FrameLink& frame = model.frames[f];
+    if (on_tf[frames_start + f]) add(frame.name, state.X_WL(model, frame.body) * frame.X_LF);
   }
   return transforms;
 }

@@ -5,6 +5,7 @@
 #include <string>
 
 #include <rosgraph_msgs/Clock.h>
+#include <tinyxml2.h>
 #include <tf2_msgs/TFMessage.h>
 
 #include "implicit_sim/BodyStates.h"
@@ -32,11 +33,27 @@ double AppliedEffort(const Joint& joint, double commanded) {
   return ClampJointEffort(joint, commanded) + joint.applied_effort;
 }
 
+// The names of a URDF's links ({} when it does not parse: then the node publishes every link itself).
+std::set<std::string> LinkNamesOf(const std::string& urdf) {
+  std::set<std::string> names;
+  tinyxml2::XMLDocument document;
+  if (document.Parse(urdf.c_str(), urdf.size()) != tinyxml2::XML_SUCCESS) return names;
+  const tinyxml2::XMLElement* robot = document.FirstChildElement("robot");
+  for (auto* link = robot ? robot->FirstChildElement("link") : nullptr; link; link = link->NextSiblingElement("link")) {
+    if (link->Attribute("name")) names.insert(link->Attribute("name"));
+  }
+  return names;
+}
+
 }  // namespace
 
 NodePublisher::NodePublisher(ros::NodeHandle nh, ros::NodeHandle pnh, const NodeParams& params,
                              std::function<LiveParams()> live, SnapshotHook on_new_world, SnapshotHook on_cycle)
     : params_(params), live_(std::move(live)), on_new_world_(std::move(on_new_world)), on_cycle_(std::move(on_cycle)) {
+  std::string description;
+  if (!params_.publish_joint_link_tf && nh.getParam("robot_description", description)) {
+    described_links_ = LinkNamesOf(description);
+  }
   clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
   // Latched: a subscriber that connects late (rviz started while paused) gets the last transforms at once, since
   // /tf is never republished with a stamp it already carried (tf2 would warn TF_REPEATED_DATA).
@@ -72,8 +89,14 @@ void NodePublisher::Cycle() {
   if (memory_.model != snapshot.model) {  // a new world: its shapes and static frames, stale contacts deleted
     if (memory_.model) AnnounceNewWorld(snapshot);
     memory_.model = snapshot.model;
-    memory_.on_tf.assign(snapshot.model->bodies.size(), 1);  // jointed links: to robot_state_publisher if asked
-    for (const Joint& joint : snapshot.model->joints) memory_.on_tf[joint.child] = params_.publish_joint_link_tf;
+    // Jointed links and frame links: to robot_state_publisher if asked, unless it never heard of them (spawned).
+    const Model& model = *snapshot.model;
+    const auto ours = [&](const std::string& link) {
+      return params_.publish_joint_link_tf || described_links_.count(link) == 0;
+    };
+    memory_.on_tf.assign(model.bodies.size() + model.frames.size(), 1);
+    for (const Joint& joint : model.joints) memory_.on_tf[joint.child] = ours(model.bodies[joint.child].name);
+    for (size_t f = 0; f < model.frames.size(); ++f) memory_.on_tf[model.bodies.size() + f] = ours(model.frames[f].name);
   }
   PublishClock(snapshot.sim_time);  // every cycle, even when time has not moved (the same time again is allowed)
   if (snapshot.version != memory_.last_version) {

@@ -61,7 +61,8 @@ implicit_sim::Contacts ToContactsMsg(const Model& model, const std::vector<Conta
 implicit_sim::StepStats ToStepStatsMsg(const StepReport& report, double sim_time, uint64_t step, double rtf,
                                        const std::string& world_frame);
 
-// world_frame -> link transforms of the moving bodies b with on_tf[b] set.
+// world_frame -> link transforms of the moving bodies b with on_tf[b] set and of the frame links f (Model::frames)
+// with on_tf[bodies + f] set.
 std::vector<geometry_msgs::TransformStamped> ToLinkTransforms(const Model& model, const State& state,
                                                               const std::vector<char>& on_tf, const ros::Time& stamp,
                                                               const std::string& world_frame);

@@ -7,6 +7,8 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <set>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -59,7 +61,7 @@ class NodePublisher {
   // What the publish thread keeps from one cycle to the next (touched by it only).
   struct Memory {
     std::shared_ptr<const Model> model;          // the model the shapes below belong to
-    std::vector<char> on_tf;                     // per body: whether /tf carries its link
+    std::vector<char> on_tf;                     // per body, then per frame link: whether /tf carries the link
     std::vector<int> shown_pairs, active_pairs;  // pairs with contact markers: last published, current
     double last_tf_time = -1.0;                  // s, simulation time of the last /tf
     uint64_t last_version = 0;                   // snapshot version last published
@@ -80,6 +82,9 @@ class NodePublisher {
                         visualization_msgs::MarkerArray* msg) const;
 
   const NodeParams params_;
+  // With publish_joint_link_tf false: the links of robot_description when the node started, which
+  // robot_state_publisher (it reads the parameter once) publishes. Links added later are published here.
+  std::set<std::string> described_links_;
   const std::function<LiveParams()> live_;
   const SnapshotHook on_new_world_, on_cycle_;
   Memory memory_;  // publish thread

@@ -471,6 +471,7 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
   const JointStarts joint_starts = ReadJointStarts(sim, *urdf_model, options.joint_positions);
 
   std::vector<std::string> from_density;  // moving links whose mass came (in part) from kDefaultDensity
+  std::vector<urdf::LinkSharedPtr> frame_links;  // links on moving links without a body
   std::vector<urdf::LinkSharedPtr> links;
   urdf_model->getLinks(links);
   std::map<std::string, urdf::LinkSharedPtr> by_name;
@@ -496,7 +497,10 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
     Body body;
     body.name = name;
     body.is_fixed = IsWeldedToWorld(*link, placement);
-    if (!body.is_fixed && IsFrameLink(*link)) continue;  // a frame on a moving link: no body
+    if (!body.is_fixed && IsFrameLink(*link)) {  // a frame on a moving link: no body (placed below)
+      frame_links.push_back(link);
+      continue;
+    }
     std::vector<LinkShape> shapes;  // urdfdom keeps the <collision> elements in document order
     const tinyxml2::XMLElement* collision_xml = e->FirstChildElement("collision");
     for (const urdf::CollisionSharedPtr& collision : link->collision_array) {
@@ -518,6 +522,16 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
     model.bodies.push_back(body);
   }
   if (model.bodies.empty()) Fail("scene '" + scene_name + "': no link besides 'world'");
+  for (const urdf::LinkSharedPtr& link : frame_links) {
+    FrameLink frame;
+    frame.name = link->name;
+    urdf::LinkConstSharedPtr above = link->getParent();
+    while (model.FindBody(above->name) < 0) above = above->getParent();  // a moving frame hangs on a body
+    frame.body = model.FindBody(above->name);
+    const Body& body = model.bodies[frame.body];
+    frame.X_LF = (body.X_WB0 * body.X_BL).inverse() * InitialLinkPose(*link, joint_starts, placement);
+    model.frames.push_back(frame);
+  }
 
   FrictionParams default_friction;
   std::map<std::pair<std::string, std::string>, FrictionParams> pair_friction;

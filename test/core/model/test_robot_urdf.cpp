@@ -354,6 +354,10 @@ TEST_F(RobotUrdf, TheRootIsFixedByDefaultAndFreeWhenFloating) {
   EXPECT_TRUE(fixed.bodies[fixed.FindBody("camera")].is_fixed);
   EXPECT_TRUE(fixed.bodies[fixed.FindBody("camera")].shapes.empty());
   EXPECT_EQ(fixed.FindBody("tool0"), -1);
+  ASSERT_EQ(fixed.frames.size(), 1u);  // for tf: 0.5 m along the arm's link frame
+  EXPECT_EQ(fixed.frames[0].name, "tool0");
+  EXPECT_EQ(fixed.frames[0].body, fixed.FindBody("arm"));
+  EXPECT_TRUE(fixed.frames[0].X_LF.isApprox(Pose(Eigen::Translation3d(0.5, 0, 0)), 1e-12));
   EXPECT_EQ(fixed.num_moving(), 2);
   ASSERT_EQ(fixed.joints.size(), 2u);
   const Joint& shoulder = fixed.joints[fixed.FindJoint("shoulder")];
@@ -386,6 +390,10 @@ TEST_F(RobotUrdf, TheRootIsFixedByDefaultAndFreeWhenFloating) {
   EXPECT_TRUE(base.X_WB0.translation().isApprox(Vec3(1.25, 2, 3)));  // its <inertial> origin is 0.25 m along x
   // The massless visual-only camera now hangs on a moving link: a frame link, no body, like tool0.
   EXPECT_EQ(free.FindBody("camera"), -1);
+  ASSERT_EQ(free.frames.size(), 2u);  // in URDF order; the camera 0.3 m above the base's link frame
+  EXPECT_EQ(free.frames[0].name, "camera");
+  EXPECT_EQ(free.frames[0].body, free.FindBody("base_link"));
+  EXPECT_TRUE(free.frames[0].X_LF.isApprox(Pose(Eigen::Translation3d(0, 0, 0.3)), 1e-12));
   EXPECT_EQ(free.num_moving(), 3);
   ASSERT_EQ(free.joints.size(), 2u);  // shoulder (parent: the free base) and tip_joint
   EXPECT_EQ(free.joints[free.FindJoint("shoulder")].parent, free.FindBody("base_link"));

@@ -98,11 +98,20 @@ struct ContactPair {
   FrictionParams friction;
 };
 
+// A link without a body of its own: no inertia, no collision, fixed joints up to a moving body (an arm's tool0 or a
+// camera frame). It moves with that body's link frame L; tf publishes it, the step never sees it.
+struct FrameLink {
+  std::string name;
+  int body = -1;                    // the nearest body above it
+  Pose X_LF = Pose::Identity();     // the frame F in the body's link frame L
+};
+
 struct Model {
   std::vector<Body> bodies;
   std::vector<Geom> geoms;         // every body's shapes, body by body, in shape order (Finalize builds it)
   std::vector<ContactPair> pairs;
   std::vector<Joint> joints;       // parents before children
+  std::vector<FrameLink> frames;   // links on moving bodies without a body, in URDF order
   std::vector<int> moving_bodies;  // indices of the moving bodies, in URDF order: velocity slot k -> body index
   std::vector<int> velocity_slot;  // body index -> velocity slot, -1 for fixed bodies
   // Pairs are listed by (lower geom index i, higher index j), i ascending then j ascending; the pairs whose lower
