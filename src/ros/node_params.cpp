@@ -46,6 +46,7 @@ void ReadOptionParams(const ros::NodeHandle& pnh, StepperOptions* options) {
 
 // The node's own private parameters besides the options table's.
 const char* const kNodeParams[] = {"scene", "scenes_dir", "paused", "on_fault", "world_frame", "publish_joint_link_tf",
+                                   "drive_gravity_compensation",
                                    "interactive_markers", "floating_root", "input_journal", "replay_journal"};
 
 void RefuseUnknownParams(const ros::NodeHandle& pnh) {
@@ -109,6 +110,7 @@ NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
   p.on_fault = on_fault == "reset" ? OnFault::kReset : OnFault::kPause;
   p.world_frame = ReadParam(pnh, "world_frame", p.world_frame);
   p.publish_joint_link_tf = ReadParam(pnh, "publish_joint_link_tf", p.publish_joint_link_tf);
+  p.drive_gravity_compensation = ReadParam(pnh, "drive_gravity_compensation", p.drive_gravity_compensation);
   p.interactive_markers = ReadParam(pnh, "interactive_markers", p.interactive_markers);
   p.floating_root = ReadParam(pnh, "floating_root", p.floating_root);
   p.input_journal = ReadParam(pnh, "input_journal", p.input_journal);

@@ -112,7 +112,7 @@ bool SimNode::StopThreads(double grace_s) {
 }
 
 CommandContext SimNode::Context() const {
-  return CommandContext{SimTime(), live_->Live(), params_.world_frame};
+  return CommandContext{SimTime(), live_->Live(), params_.world_frame, params_.drive_gravity_compensation};
 }
 
 bool SimNode::StepOnce(double rtf) {

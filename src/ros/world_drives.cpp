@@ -76,6 +76,7 @@ bool SetJointDrives(const CommandContext& context, const implicit_sim::JointComm
     d.velocity_target = Entry(msg.velocity, i, 0.0);
     d.stiffness = msg.position.empty() ? 0.0 : Entry(msg.stiffness, i, live.drive_stiffness);
     d.damping = Entry(msg.damping, i, live.drive_damping);
+    d.gravity_compensation = context.drive_gravity_compensation;
     if (!CheckJointDrive(model.joints[joints[i]], d, error)) return false;
   }
   for (size_t i = 0; i < n; ++i) {
@@ -94,6 +95,7 @@ bool StartTrajectory(const CommandContext& context, const trajectory_msgs::Joint
   const LiveParams& live = context.live;
   trajectory.stiffness = live.drive_stiffness;
   trajectory.damping = live.drive_damping;
+  trajectory.gravity_compensation = context.drive_gravity_compensation;
   if (n == 0 || msg.points.empty()) {
     *error = "a trajectory needs joint_names and points";
     return false;
@@ -160,7 +162,8 @@ void UpdateTrajectoryDrives(double t_end, World* world) {
       }
       const Joint& joint = w.model->joints[j];
       if (joint.limited) p = std::clamp(p, joint.lower, joint.upper);  // a cubic may overshoot between points
-      w.data->joint_drives[j] = JointDrive{p, v, trajectory.stiffness, trajectory.damping};
+      w.data->joint_drives[j] =
+          JointDrive{p, v, trajectory.stiffness, trajectory.damping, trajectory.gravity_compensation};
     }
   }
   // Finished trajectories keep holding their last point (the drives stay as set) but are no longer evaluated.

@@ -58,6 +58,8 @@ struct NodeParams {
   // Whether /tf carries the links that hang on joints (world -> link, like every other body). Set false to leave them
   // to robot_state_publisher fed by /joint_states (it publishes parent -> child along the URDF tree).
   bool publish_joint_link_tf = true;
+  // Joint drives of ~joint_command and ~joint_trajectory add the gravity feed-forward (JointDrive::gravity_compensation).
+  bool drive_gravity_compensation = false;
   bool interactive_markers = true;  // an interactive marker per moving body (~drag) that pushes it with the mouse
   // A scene whose root link is not `world` (a robot URDF): false welds the root to the world, true makes it free.
   bool floating_root = false;

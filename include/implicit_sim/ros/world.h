@@ -39,6 +39,7 @@ struct Trajectory {
   std::vector<double> times, from;  // time_from_start of each point; the joints' positions at the start
   std::vector<std::vector<double>> positions, velocities;  // per point, per joint
   double stiffness = 0.0, damping = 0.0;  // the drive gains (~drive_stiffness, ~drive_damping when received)
+  bool gravity_compensation = false;      // ~drive_gravity_compensation when received
 };
 
 // What the node's physics thread steps (it alone touches a World). Data keeps a pointer to its model, so the model

@@ -27,6 +27,7 @@ struct CommandContext {
   double sim_time = 0.0;
   LiveParams live;
   std::string world_frame;
+  bool drive_gravity_compensation = false;  // ~drive_gravity_compensation
 };
 
 // The body named `name`; -1 with *error when there is none or (must_move) it is fixed.

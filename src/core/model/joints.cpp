@@ -152,7 +152,35 @@ double JointDrivePositionError(const Joint& joint, double position_target, doubl
 
 double JointDriveEffortAt(const Joint& joint, const JointDrive& drive, double q, double qdot) {
   return ClampJointEffort(joint, drive.stiffness * JointDrivePositionError(joint, drive.position_target, q) +
-                                     drive.damping * (drive.velocity_target - qdot));
+                                     drive.damping * (drive.velocity_target - qdot) + drive.gravity_effort);
+}
+
+std::vector<int> JointSubtree(const Model& model, int j) {
+  std::vector<char> below(model.bodies.size(), 0);  // joints list parents before children
+  below[model.joints[j].child] = 1;
+  for (size_t k = j + 1; k < model.joints.size(); ++k) {
+    const Joint& next = model.joints[k];
+    if (next.parent >= 0 && below[next.parent]) below[next.child] = 1;
+  }
+  std::vector<int> subtree;
+  for (size_t b = 0; b < below.size(); ++b) {
+    if (below[b]) subtree.push_back(static_cast<int>(b));
+  }
+  return subtree;
+}
+
+double JointGravityEffort(const Model& model, const State& state, int j, const std::vector<int>& subtree) {
+  const Joint& joint = model.joints[j];
+  if (!joint.has_coordinate()) return 0.0;
+  const Pose X_WC = state.X_WB(model, joint.child);
+  const Vec3 a_W = X_WC.linear() * joint.R_CJ.col(0), p_WO = X_WC * joint.p_CJ;
+  Vec3 weight_W = Vec3::Zero(), moment_WO = Vec3::Zero();  // N, and N m about O
+  for (int b : subtree) {
+    const Vec3 f_W = model.bodies[b].mass * model.gravity_W;
+    weight_W += f_W;
+    moment_WO += (state.X_WB(model, b).translation() - p_WO).cross(f_W);
+  }
+  return joint.type == JointType::kPrismatic ? -a_W.dot(weight_W) : -a_W.dot(moment_WO);
 }
 
 void AddJointEffortWrench(const Model& model, const State& state, const Eigen::VectorXd& efforts,

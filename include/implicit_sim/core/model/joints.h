@@ -50,22 +50,34 @@ double ClampJointEffort(const Joint& joint, double commanded);
 
 // A PD drive of one joint (MuJoCo's position and velocity actuators, Gazebo's and PhysX's joint drives), one per model
 // joint in Data::joint_drives. The step evaluates it implicitly, at the END of the step (step/rows/drive_rows.h):
-//   tau = clamp(stiffness (position_target - q) + damping (velocity_target - qdot), -E, E)
+//   tau = clamp(stiffness (position_target - q) + damping (velocity_target - qdot) + tau_g, -E, E)
 // with q, qdot the end-of-step joint position and rate, E = Joint::effort_limit (no clamp when it is 0), so that it is
-// stable at any gain. It adds to a commanded effort (AddJointEffortWrench) and to the joint's own damping. Inactive
-// when stiffness == 0 and damping == 0 (JointDriveActive).
-struct JointDrive {            // one per model joint; inactive when stiffness == 0 and damping == 0
+// stable at any gain, and tau_g the gravity feed-forward: with gravity_compensation, JointGravityEffort at the start of
+// each step (Step sets gravity_effort), so a held arm does not sag by its weight over the stiffness. It adds to a
+// commanded effort (AddJointEffortWrench) and to the joint's own damping. Inactive when stiffness == 0,
+// damping == 0 and no gravity compensation (JointDriveActive).
+struct JointDrive {            // one per model joint
   double position_target = 0;  // rad or m
   double velocity_target = 0;  // rad/s or m/s
   double stiffness = 0;        // kp >= 0: N m/rad or N/m
   double damping = 0;          // kd >= 0: N m s/rad or N s/m
+  bool gravity_compensation = false;
+  double gravity_effort = 0;   // N m or N: set by Step at the start of each step (0 without gravity_compensation)
 };
 // A joint position this close to a limit (rad or m) counts as on it: a drive may hold a finger measured at -1e-16
 // below its lower limit of 0.
 constexpr double kJointLimitRoundOff = 1e-12;
 // The largest stiffness (N m/rad or N/m) and damping (N m s/rad or N s/m) CheckJointDrive accepts.
 constexpr double kMaxJointDriveGain = 1e12;
-inline bool JointDriveActive(const JointDrive& drive) { return drive.stiffness != 0.0 || drive.damping != 0.0; }
+inline bool JointDriveActive(const JointDrive& drive) {
+  return drive.stiffness != 0.0 || drive.damping != 0.0 || drive.gravity_compensation;
+}
+// The bodies of joint j's subtree: its child and every body below it through joints (ascending).
+std::vector<int> JointSubtree(const Model& model, int joint);
+// The effort (N m or N) that holds joint j's subtree (JointSubtree; other joints held) against gravity in `state`:
+// -sum_b m_b g . dp_b/dq, dp_b/dq = a x (p_b - o) for a revolute or continuous joint with axis a through o, a for a
+// prismatic one; 0 for a fixed joint. A mimic follower below j is taken as held. No allocation.
+double JointGravityEffort(const Model& model, const State& state, int joint, const std::vector<int>& subtree);
 // Whether `drive` is valid for `joint`: finite targets, gains in [0, kMaxJointDriveGain], and if active a joint with a
 // coordinate (never a fixed joint, nor a mimic joint: its leader is driven) and a position target within [lower, upper] (give or take kJointLimitRoundOff) for
 // a limited joint. Otherwise false,

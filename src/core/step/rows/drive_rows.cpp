@@ -35,7 +35,7 @@ void AddDriveRow(const RowContext& ctx, int j, const JointDrive& drive, double s
   const double rate = G_q.Rate(eP.v, eP.w, eC.v, eC.w);
   const ClampedEffort target = ClampToEffortLimit(
       joint, drive.stiffness * JointDrivePositionError(joint, drive.position_target, q) +
-                 drive.damping * (drive.velocity_target - rate));
+                 drive.damping * (drive.velocity_target - rate) + drive.gravity_effort);
   const double inv_scale = 1.0 / DriveRowScale(ctx, drive);
   ctx.out.Phi[col] = (ctx.z[col] - target.value) * inv_scale;
   if (ctx.out.WantJacobian()) ctx.out.AddJ(col, col, inv_scale);
@@ -52,7 +52,7 @@ void AddAverageDriveRow(const RowContext& ctx, int j, const JointDrive& drive, d
   const double rate = G_q.Rate(eP.v, eP.w, eC.v, eC.w);
   const ClampedEffort target = ClampToEffortLimit(
       joint, drive.stiffness * JointDrivePositionError(joint, drive.position_target, q1) +
-                 rate_gain * (drive.velocity_target - rate));
+                 rate_gain * (drive.velocity_target - rate) + drive.gravity_effort);
   const double inv_scale = 1.0 / DriveRowScale(ctx, drive);
   ctx.out.Phi[col] = (ctx.z[col] - 0.5 * (u1 + target.value)) * inv_scale;
   if (ctx.out.WantJacobian()) ctx.out.AddJ(col, col, inv_scale);

@@ -1,9 +1,10 @@
 // Joint drives (joints.h, JointDrive) as rows of the step's problems: per driven joint j one unknown u, the drive
 // effort (N m or N), the last of the joint's block (StepLayout::SetDrivenJoints), with the box law (doc/method.md,
 // "Joint drives")
-//   u = mid(-E, E, P),  P = kp e(q_target, q) + kd (v_target - qdot)
+//   u = mid(-E, E, P),  P = kp e(q_target, q) + kd (v_target - qdot) + tau_g
 // where q and qdot are the joint position and rate at the END of the step (implicit, hence stable at any gain), e the
-// position error and E = Joint::effort_limit (P itself when E = 0). The row is (u - mid(-E, E, P)) / S with
+// position error, tau_g the gravity feed-forward (JointDrive::gravity_effort, constant over the step) and
+// E = Joint::effort_limit (P itself when E = 0). The row is (u - mid(-E, E, P)) / S with
 // S = Fs + kp h + kd (times 1 rad/s or 1 m/s): a force row for soft gains, a velocity-level constraint row like the
 // joint equalities' for stiff ones. mid is the min-map of the box complementarity problem -E <= u <= E _|_ u - P,
 // piecewise linear: its generalized Jacobian takes the slope 1 inside the box (and on its edge), 0 outside. The
