@@ -279,9 +279,12 @@ void RenameAll(XMLElement* robot, const std::string& prefix) {
       Rename(e, "link", prefix, true);
     } else if (tag == "joint") {
       Rename(e, "name", prefix, false);
+    } else if (tag == "sensor") {
+      Rename(e, "name", prefix, false);
+      Rename(e, "link", prefix, true);
     } else {
       Fail(std::string(kAdd) + "addition <implicit_sim>: unknown element <" + tag +
-           "> (allowed: friction, body, joint, self_collide, disable_collisions)");
+           "> (allowed: friction, body, joint, self_collide, disable_collisions, sensor)");
     }
   }
 }
@@ -391,7 +394,8 @@ std::vector<std::string> RemoveSubtrees(XMLElement* robot, const std::set<std::s
   XMLElement* sim = SimOf(robot, false);
   for (XMLElement* e = sim ? sim->FirstChildElement() : nullptr; e; e = e->NextSiblingElement()) {
     const std::string tag = e->Name();
-    if (Names(e, "link1", links) || Names(e, "link2", links) || ((tag == "body" || tag == "self_collide") && Names(e, "link", links)) ||
+    if (Names(e, "link1", links) || Names(e, "link2", links) ||
+        ((tag == "body" || tag == "self_collide" || tag == "sensor") && Names(e, "link", links)) ||
         (tag == "joint" && Names(e, "name", joints))) {
       doomed.push_back(e);
     }

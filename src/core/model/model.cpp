@@ -26,6 +26,8 @@ bool Model::Joined(int i, int j) const {
   return false;
 }
 
+const char* SensorTypeName(SensorType type) { return type == SensorType::kImu ? "imu" : "contact"; }
+
 const char* JointTypeName(JointType type) {
   switch (type) {
     case JointType::kFixed: return "fixed";

@@ -306,6 +306,42 @@ FrictionParams ReadFriction(const tinyxml2::XMLElement* e, const std::string& wh
   return f;
 }
 
+// <implicit_sim><sensor name type link [rate]/>: a contact sensor on a link with a body, an IMU on any link with a
+// body or a frame link; names unique.
+Sensor ReadSensor(const tinyxml2::XMLElement* e, const Model& model) {
+  const char* name = e->Attribute("name");
+  const std::string where = "<implicit_sim><sensor name='" + std::string(name ? name : "") + "'>";
+  CheckAttributes(e, {"name", "type", "link", "rate"}, where);
+  Sensor sensor;
+  if (!name || !*name) Fail("<implicit_sim><sensor>: attribute 'name' must be a non-empty name");
+  sensor.name = name;
+  for (const Sensor& other : model.sensors) {
+    if (other.name == sensor.name) Fail(where + ": a second sensor of this name");
+  }
+  const char* type = e->Attribute("type");
+  const std::string type_text = type ? type : "";
+  if (type_text != "contact" && type_text != "imu") {
+    Fail(where + ": attribute 'type' = '" + type_text + "' must be contact or imu");
+  }
+  sensor.type = type_text == "imu" ? SensorType::kImu : SensorType::kContact;
+  const char* link = e->Attribute("link");
+  sensor.link = link ? link : "";
+  sensor.body = model.FindBody(sensor.link);
+  if (sensor.body < 0 && sensor.type == SensorType::kImu) {
+    for (const FrameLink& frame : model.frames) {
+      if (frame.name != sensor.link) continue;
+      sensor.body = frame.body;
+      sensor.X_LS = frame.X_LF;
+    }
+  }
+  if (sensor.body < 0) {
+    Fail(where + ": attribute 'link' must name a link of the scene with a body" +
+         (sensor.type == SensorType::kImu ? std::string(" or a frame link on one") : std::string()));
+  }
+  sensor.rate_hz = ReadScalar(e, "rate", where, 0.0, 1000.0, true, sensor.rate_hz, false);
+  return sensor;
+}
+
 void ReadBodySettings(const tinyxml2::XMLElement* e, Body* body) {
   const std::string where = "<implicit_sim><body link='" + body->name + "'>";
   CheckAttributes(e, {"link", "velocity", "angular_velocity", "force", "torque", "locked"}, where);
@@ -556,10 +592,12 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
         if (b < 0) Fail("<implicit_sim><body>: attribute 'link' must name a link of the scene");
         if (model.bodies[b].is_fixed) Fail("<implicit_sim><body link='" + std::string(link) + "'>: the link is fixed");
         ReadBodySettings(e, &model.bodies[b]);
+      } else if (tag == "sensor") {
+        model.sensors.push_back(ReadSensor(e, model));
       } else if (tag != "joint" && tag != "self_collide" && tag != "disable_collisions") {
         // <joint>: ReadJointStarts; <self_collide>, <disable_collisions>: ExcludeSelfCollisions
         Fail("<implicit_sim>: unknown element <" + tag +
-             "> (allowed: friction, body, joint, self_collide, disable_collisions)");
+             "> (allowed: friction, body, joint, self_collide, disable_collisions, sensor)");
       }
     }
   }

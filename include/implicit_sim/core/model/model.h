@@ -106,12 +106,27 @@ struct FrameLink {
   Pose X_LF = Pose::Identity();     // the frame F in the body's link frame L
 };
 
+// A sensor declared in the scene (<implicit_sim><sensor name type link rate/>, doc/scenes.md#sensors), read after each
+// step (step/sensors.h): a contact sensor reports the contacts touching its link (as Gazebo's bumper), an IMU the
+// orientation, angular velocity and specific force of its link's frame.
+enum class SensorType { kContact, kImu };
+const char* SensorTypeName(SensorType type);  // "contact", "imu"
+struct Sensor {
+  std::string name;
+  SensorType type = SensorType::kContact;
+  std::string link;                 // the URDF link it sits on (a body's, or a frame link's for an IMU)
+  int body = -1;                    // the body that carries that link
+  Pose X_LS = Pose::Identity();     // the sensor frame S (the link's frame) in the body's link frame L
+  double rate_hz = 50.0;            // samples per second of simulation time, (0, 1000]
+};
+
 struct Model {
   std::vector<Body> bodies;
   std::vector<Geom> geoms;         // every body's shapes, body by body, in shape order (Finalize builds it)
   std::vector<ContactPair> pairs;
   std::vector<Joint> joints;       // parents before children
   std::vector<FrameLink> frames;   // links on moving bodies without a body, in URDF order
+  std::vector<Sensor> sensors;     // in the order of the scene's <implicit_sim>
   std::vector<int> moving_bodies;  // indices of the moving bodies, in URDF order: velocity slot k -> body index
   std::vector<int> velocity_slot;  // body index -> velocity slot, -1 for fixed bodies
   // Pairs are listed by (lower geom index i, higher index j), i ascending then j ascending; the pairs whose lower
