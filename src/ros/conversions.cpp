@@ -20,14 +20,6 @@ std_msgs::ColorRGBA Color(float r, float g, float b, float a) {
   return c;
 }
 
-geometry_msgs::Vector3 ToVectorMsg(const Vec3& v) {
-  geometry_msgs::Vector3 m;
-  m.x = v.x();
-  m.y = v.y();
-  m.z = v.z();
-  return m;
-}
-
 // A TRIANGLE_LIST of the boundary (MakeSurfaceMesh: rays on a 32 x 64 latitude-longitude grid), in the shape frame.
 void RayCastMesh(const ConvexShape& shape, visualization_msgs::Marker* marker) {
   const SurfaceMesh mesh = MakeSurfaceMesh(shape, 32);
@@ -40,6 +32,14 @@ void RayCastMesh(const ConvexShape& shape, visualization_msgs::Marker* marker) {
 }
 
 }  // namespace
+
+geometry_msgs::Vector3 ToVectorMsg(const Vec3& v) {
+  geometry_msgs::Vector3 m;
+  m.x = v.x();
+  m.y = v.y();
+  m.z = v.z();
+  return m;
+}
 
 geometry_msgs::Point ToPointMsg(const Vec3& p) {
   geometry_msgs::Point m;

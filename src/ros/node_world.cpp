@@ -62,6 +62,7 @@ bool NamedValues(const std::vector<std::string>& names, const std::vector<double
 
 void SimNode::ReplaceWorld(std::unique_ptr<World> next) {
   world_ = std::move(next);
+  sensors_->SetWorld(*world_->model, SimTime());
   stepped_ = false;  // a new Data: no contact results, the next step starts cold
   restart_pacing_ = true;
   SaveSnapshot();

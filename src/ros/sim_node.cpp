@@ -44,6 +44,8 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
       nh, pnh, params_, [this] { return live_->Live(); },
       [this](const NodeSnapshot& snapshot) { drag_markers_->SetUp(*snapshot.model, snapshot.state); },
       [this](const NodeSnapshot& snapshot) { drag_markers_->Follow(snapshot); });
+  sensors_ = std::make_unique<NodeSensors>(pnh, params_.world_frame, params_.options.contact_threshold);
+  sensors_->SetWorld(model, SimTime());
   SaveSnapshot();
   AdvertiseServices();
   publisher_->PublishStaticTf(model);
@@ -129,6 +131,7 @@ bool SimNode::StepOnce(double rtf) {
   World& w = *world_;
   StepReport report;
   w.data->interrupt = &interrupt_;
+  state_before_ = w.state;
   try {
     report = Step(*w.model, options_, &w.state, w.data.get(), &w.wrench_W);
   } catch (const std::exception& e) {
@@ -144,6 +147,7 @@ bool SimNode::StepOnce(double rtf) {
   std::string failure;
   if (report.advanced) {
     stepped_ = true;
+    sensors_->Sample(*w.model, state_before_, w.state, options_.h, w.data->contacts, SimTime());
   } else {
     // Step left the last good state in place (it never publishes NaN): warn once, then pause or reset.
     failure = std::string(StepFaultName(report.fault)) + (report.fault_detail.empty() ? "" : ": ") +

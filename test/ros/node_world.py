@@ -11,7 +11,9 @@
   latency of cycles 91-100 within 20 % of cycles 1-10 (the least of each window, paused: the calls' own cost);
 - the UR5 as published (test/data/vendor, on ROS_PACKAGE_PATH by node_world.test) spawns with start joint positions,
   and ~set_joint_positions sets its configuration exactly or refuses (unknown joint, NaN, unequal lengths, an overlap
-  with the ground) changing nothing."""
+  with the ground) changing nothing;
+- a spawned ball with a contact sensor and an IMU (<implicit_sim><sensor>) resting on the ground publishes on
+  ~sensors/<prefix><name>: its weight through the contact sensor, +g upwards from the IMU, at the sensors' rates."""
 import os
 import statistics
 import struct
@@ -24,10 +26,10 @@ import rosgraph
 import rospy
 import rostest
 from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
-from implicit_sim.msg import BodyStates
+from implicit_sim.msg import BodyStates, ContactSensor
 from implicit_sim.scene import Scene, Shape
 from implicit_sim.srv import Delete, GetBodyState, LoadScene, SetJointPositions, Spawn
-from sensor_msgs.msg import JointState
+from sensor_msgs.msg import Imu, JointState
 from std_srvs.srv import Trigger
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
@@ -232,6 +234,39 @@ class NodeWorld(unittest.TestCase):
             self.assertIn(message, res.message)
             self.assertEqual(self.joint_positions(), q)
         self.assertTrue(call("unpause", Trigger).success)
+
+    def test_7_a_spawned_balls_contact_sensor_and_imu_read_its_weight_and_gravity(self):
+        ball = """<robot name="sensed"><implicit_sim><sensor name="bumper" type="contact" link="ball" rate="20"/>
+          <sensor name="imu" type="imu" link="ball" rate="50"/></implicit_sim><link name="world"/>
+          <link name="ball"><inertial><mass value="1"/><inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0"
+          iyz="0"/></inertial><collision><geometry><sphere radius="0.05"/></geometry></collision></link>
+          <joint name="ball_joint" type="floating"><parent link="world"/><child link="ball"/></joint></robot>"""
+        res = call("spawn", Spawn, urdf=ball, prefix="s_", pose=pose(1.0, 1.0, 0.05))
+        self.assertTrue(res.success, res.message)
+        time.sleep(1.0)  # settled on the ground
+        contact = rospy.wait_for_message(NODE + "/sensors/s_bumper", ContactSensor, timeout=10)
+        self.assertEqual(contact.link, "s_ball")
+        self.assertEqual(len(contact.contacts), 1)
+        self.assertAlmostEqual(contact.wrench.force.z, 9.81, delta=1e-6)
+        self.assertAlmostEqual(contact.contacts[0].normal_force, 9.81, delta=1e-6)
+        imu = rospy.wait_for_message(NODE + "/sensors/s_imu", Imu, timeout=10)
+        self.assertEqual(imu.header.frame_id, "s_ball")
+        self.assertAlmostEqual(imu.linear_acceleration.z, 9.81, delta=1e-6)
+        self.assertAlmostEqual(imu.orientation.w, 1.0, delta=1e-9)
+        # Rates in simulation time (the node runs at real time here): 20 and 50 Hz, give or take a step.
+        stamps = {"bumper": [], "imu": []}
+        subs = [rospy.Subscriber(NODE + "/sensors/s_bumper", ContactSensor,
+                                 lambda m: stamps["bumper"].append(m.header.stamp.to_sec())),
+                rospy.Subscriber(NODE + "/sensors/s_imu", Imu, lambda m: stamps["imu"].append(m.header.stamp.to_sec()))]
+        time.sleep(2.0)
+        for sub in subs:
+            sub.unregister()
+        for name, rate in (("bumper", 20.0), ("imu", 50.0)):
+            gaps = [b - a for a, b in zip(stamps[name], stamps[name][1:])]
+            self.assertGreater(len(gaps), 5, name)
+            self.assertAlmostEqual(statistics.median(gaps), 1.0 / rate, delta=0.011, msg=name)
+        self.assertTrue(call("delete", Delete, ["s_ball"]).success)
+
 
 if __name__ == "__main__":
     rospy.init_node("node_world")

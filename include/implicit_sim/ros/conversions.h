@@ -29,6 +29,7 @@ namespace ros_conversions {
 
 geometry_msgs::Pose ToPoseMsg(const Pose& X);
 geometry_msgs::Point ToPointMsg(const Vec3& p);
+geometry_msgs::Vector3 ToVectorMsg(const Vec3& v);
 geometry_msgs::Transform ToTransformMsg(const Pose& X);
 Vec3 ToVec3(const geometry_msgs::Vector3& v);
 Vec3 ToVec3(const geometry_msgs::Point& p);

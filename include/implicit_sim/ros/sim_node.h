@@ -45,6 +45,7 @@
 #include "implicit_sim/ros/node_journal.h"
 #include "implicit_sim/ros/node_params.h"
 #include "implicit_sim/ros/node_publisher.h"
+#include "implicit_sim/ros/node_sensors.h"
 #include "implicit_sim/ros/physics_mailbox.h"
 #include "implicit_sim/ros/world.h"
 #include "implicit_sim/ros/world_commands.h"
@@ -152,6 +153,8 @@ class SimNode {
   std::unique_ptr<NodeDiagnostics> diagnostics_;
   std::unique_ptr<DragMarkers> drag_markers_;
   std::unique_ptr<NodePublisher> publisher_;
+  std::unique_ptr<NodeSensors> sensors_;  // the physics thread's
+  State state_before_;                    // the state at the start of the step in progress (the IMUs' differences)
 
   // Every thread ends: the physics thread after the step in progress, the others at once.
   std::atomic<bool> stopping_{false};
