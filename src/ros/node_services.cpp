@@ -85,6 +85,9 @@ void SimNode::AdvertiseServices() {
   joint_trajectory_sub_ = SubscribeCommand("joint_trajectory", 10, kJointTrajectoryInput);
   run_steps_server_ = std::make_unique<actionlib::SimpleActionServer<implicit_sim::RunStepsAction>>(
       pnh_, "run_steps", [this](const implicit_sim::RunStepsGoalConstPtr& goal) { OnRunStepsGoal(goal); }, false);
+  follow_trajectory_server_ = std::make_unique<actionlib::SimpleActionServer<implicit_sim::FollowTrajectoryAction>>(
+      pnh_, "follow_trajectory",
+      [this](const implicit_sim::FollowTrajectoryGoalConstPtr& goal) { OnFollowTrajectoryGoal(goal); }, false);
 }
 
 bool SimNode::OnPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {

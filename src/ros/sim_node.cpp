@@ -56,6 +56,7 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
 
 SimNode::~SimNode() {
   if (run_steps_server_) run_steps_server_->shutdown();
+  if (follow_trajectory_server_) follow_trajectory_server_->shutdown();
   StopThreads(std::numeric_limits<double>::infinity());
   drag_markers_.reset();
 }
@@ -68,6 +69,7 @@ void SimNode::Run() {
   StartThread(&publish_thread_, &SimNode::PublishLoop);
   StartThread(&diagnostics_thread_, &SimNode::DiagnosticsLoop);
   run_steps_server_->start();
+  follow_trajectory_server_->start();
   ros::waitForShutdown();
   if (!StopThreads(kShutdownGraceS)) {
     // The step did not stop in time (a single factorization or Ipopt iteration that long): exit without it (nothing is
@@ -78,6 +80,7 @@ void SimNode::Run() {
     std::_Exit(0);
   }
   run_steps_server_->shutdown();
+  follow_trajectory_server_->shutdown();
 }
 
 void SimNode::StartThread(std::thread* thread, void (SimNode::*loop)()) {

@@ -5,6 +5,7 @@
 #include "implicit_sim/ros/world_commands.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 #include "implicit_sim/core/base/format.h"
@@ -88,6 +89,12 @@ bool SetJointDrives(const CommandContext& context, const implicit_sim::JointComm
 
 bool StartTrajectory(const CommandContext& context, const trajectory_msgs::JointTrajectory& msg, World* world,
                      std::string* error) {
+  return StartTrajectory(context, msg, world, error, nullptr);
+}
+
+bool StartTrajectory(const CommandContext& context, const trajectory_msgs::JointTrajectory& msg, World* world,
+                     std::string* error, uint64_t* id) {
+  static std::atomic<uint64_t> last_id{0};
   const Model& model = *world->model;
   Trajectory trajectory;
   if (!FindDrivenJoints(model, msg.joint_names, &trajectory.joints, error)) return false;
@@ -136,32 +143,50 @@ bool StartTrajectory(const CommandContext& context, const trajectory_msgs::Joint
     trajectory.from.push_back(JointPosition(model, world->state, j));
     StopTrajectoryOf(j, world);
   }
+  trajectory.id = ++last_id;
+  if (id) *id = trajectory.id;
   world->trajectories.push_back(std::move(trajectory));
   return true;
+}
+
+void TrajectoryTargetAt(const Trajectory& trajectory, size_t i, const Joint& joint, double t, double* p, double* v) {
+  const double s = t - trajectory.start;  // s since the trajectory's start
+  const auto& times = trajectory.times;
+  const size_t k = std::upper_bound(times.begin(), times.end(), s) - times.begin();  // next point index
+  if (s < 0.0) {  // not started: hold where it began
+    *p = trajectory.from[i], *v = 0.0;
+  } else if (k == times.size()) {  // done: hold the last point
+    *p = trajectory.positions.back()[i], *v = 0.0;
+  } else {
+    const double t0 = k == 0 ? 0.0 : times[k - 1];
+    const double p0 = k == 0 ? trajectory.from[i] : trajectory.positions[k - 1][i];
+    const double v0 = k == 0 ? 0.0 : trajectory.velocities[k - 1][i];
+    Hermite(p0, v0, trajectory.positions[k][i], trajectory.velocities[k][i], times[k] - t0, s - t0, p, v);
+  }
+  if (joint.limited) *p = std::clamp(*p, joint.lower, joint.upper);  // a cubic may overshoot between points
+}
+
+void StopTrajectory(uint64_t id, World* world) {
+  for (auto it = world->trajectories.begin(); it != world->trajectories.end(); ++it) {
+    if (it->id != id) continue;
+    for (int j : it->joints) {
+      if (j < 0) continue;
+      world->data->joint_drives[j] = JointDrive{JointPosition(*world->model, world->state, j), 0.0, it->stiffness,
+                                                it->damping, it->gravity_compensation};
+    }
+    world->trajectories.erase(it);
+    return;
+  }
 }
 
 void UpdateTrajectoryDrives(double t_end, World* world) {
   World& w = *world;
   for (const Trajectory& trajectory : w.trajectories) {
-    const double s = t_end - trajectory.start;  // s since the trajectory's start
-    const auto& times = trajectory.times;
-    const size_t k = std::upper_bound(times.begin(), times.end(), s) - times.begin();  // next point index
     for (size_t i = 0; i < trajectory.joints.size(); ++i) {
       const int j = trajectory.joints[i];
       if (j < 0) continue;
       double p, v;
-      if (s < 0.0) {  // not started: hold where it began
-        p = trajectory.from[i], v = 0.0;
-      } else if (k == times.size()) {  // done: hold the last point
-        p = trajectory.positions.back()[i], v = 0.0;
-      } else {
-        const double t0 = k == 0 ? 0.0 : times[k - 1];
-        const double p0 = k == 0 ? trajectory.from[i] : trajectory.positions[k - 1][i];
-        const double v0 = k == 0 ? 0.0 : trajectory.velocities[k - 1][i];
-        Hermite(p0, v0, trajectory.positions[k][i], trajectory.velocities[k][i], times[k] - t0, s - t0, &p, &v);
-      }
-      const Joint& joint = w.model->joints[j];
-      if (joint.limited) p = std::clamp(p, joint.lower, joint.upper);  // a cubic may overshoot between points
+      TrajectoryTargetAt(trajectory, i, w.model->joints[j], t_end, &p, &v);
       w.data->joint_drives[j] =
           JointDrive{p, v, trajectory.stiffness, trajectory.damping, trajectory.gravity_compensation};
     }

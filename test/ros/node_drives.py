@@ -4,15 +4,21 @@
   which /joint_states reports (plus the scene's constant 2 N);
 - a ~joint_trajectory lifts the palm 0.1 m in 0.5 s of simulation time: the ball rises with it without slipping and
   the lift ends on its target within the sag of the drive;
-- bad commands are dropped whole and counted in /diagnostics."""
+- bad commands are dropped whole and counted in /diagnostics;
+- ~follow_trajectory (implicit_sim/FollowTrajectory): a move within its goal tolerance succeeds with feedback; a path
+  tolerance the drive cannot keep aborts (PATH_TOLERANCE_VIOLATED) and the joint holds where it was; a tolerance on a
+  joint the trajectory does not move is refused (INVALID_JOINTS); a cancelled goal is preempted."""
 import time
 import unittest
 
+import actionlib
 import dynamic_reconfigure.client
 import rospy
+from actionlib_msgs.msg import GoalStatus
 import rostest
 from diagnostic_msgs.msg import DiagnosticArray
-from implicit_sim.msg import JointCommand
+from implicit_sim.msg import (FollowTrajectoryAction, FollowTrajectoryGoal, FollowTrajectoryResult, JointCommand,
+                              JointTolerance)
 from implicit_sim.srv import GetBodyState, Step
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
@@ -97,6 +103,59 @@ class NodeDrives(unittest.TestCase):
         self.assertEqual(diagnostic("dropped_drive_commands") - before, 5)
         self.assertTrue(call("step", Step, 10).success)
         self.assertAlmostEqual(joints()["lift"][0], lift, delta=1e-4)  # the drives in force are unchanged
+
+
+    def test_3_follow_trajectory_waits_for_its_tolerances_and_reports_a_code(self):
+        client = dynamic_reconfigure.client.Client(NODE, timeout=10)
+        client.update_configuration({"drive_stiffness": 2000.0, "drive_damping": 60.0})
+        action = actionlib.SimpleActionClient(NODE + "/follow_trajectory", FollowTrajectoryAction)
+        self.assertTrue(action.wait_for_server(rospy.Duration(10)))
+
+        def goal(target, duration, path=0.0, at_goal=0.0, tolerance_joint="lift"):
+            trajectory = JointTrajectory(joint_names=["lift"], points=[JointTrajectoryPoint(
+                positions=[target], velocities=[0.0], time_from_start=rospy.Duration(duration))])
+            return FollowTrajectoryGoal(trajectory=trajectory,
+                                        path_tolerance=[JointTolerance(tolerance_joint, path, 0.0)],
+                                        goal_tolerance=[JointTolerance(tolerance_joint, at_goal, 0.0)],
+                                        goal_time_tolerance=rospy.Duration(0.5))
+
+        def run(steps):  # step in chunks, letting the action look at the world between them
+            for _ in range(steps // 50):
+                self.assertTrue(call("step", Step, 50).success)
+                time.sleep(0.05)
+
+        feedback = []
+        lift0 = joints()["lift"][0]
+        action.send_goal(goal(lift0 - 0.05, 0.5, at_goal=0.002), feedback_cb=feedback.append)
+        run(1000)
+        self.assertTrue(action.wait_for_result(rospy.Duration(10)))
+        self.assertEqual(action.get_state(), GoalStatus.SUCCEEDED, action.get_goal_status_text())
+        self.assertEqual(action.get_result().error_code, FollowTrajectoryResult.SUCCESSFUL)
+        self.assertGreater(len(feedback), 3)
+        self.assertEqual(list(feedback[-1].joint_names), ["lift"])
+        self.assertLess(abs(feedback[-1].error.positions[0]), 0.002)
+        self.assertAlmostEqual(joints()["lift"][0], lift0 - 0.05, delta=0.002)
+
+        lift1 = joints()["lift"][0]
+        action.send_goal(goal(lift1 + 0.05, 0.2, path=1e-6))
+        run(300)
+        self.assertTrue(action.wait_for_result(rospy.Duration(10)))
+        self.assertEqual(action.get_state(), GoalStatus.ABORTED)
+        self.assertEqual(action.get_result().error_code, FollowTrajectoryResult.PATH_TOLERANCE_VIOLATED)
+        stopped = joints()["lift"][0]
+        self.assertLess(stopped - lift1, 0.02)  # stopped early on the way up
+        run(200)
+        self.assertAlmostEqual(joints()["lift"][0], stopped, delta=1e-3)  # held where it stopped
+
+        action.send_goal(goal(lift1, 0.5, at_goal=0.01, tolerance_joint="left_slide"))
+        self.assertTrue(action.wait_for_result(rospy.Duration(10)))
+        self.assertEqual(action.get_result().error_code, FollowTrajectoryResult.INVALID_JOINTS)
+
+        action.send_goal(goal(lift1 + 0.05, 5.0))
+        run(100)
+        action.cancel_goal()
+        self.assertTrue(action.wait_for_result(rospy.Duration(10)))
+        self.assertEqual(action.get_state(), GoalStatus.PREEMPTED)
 
 
 if __name__ == "__main__":

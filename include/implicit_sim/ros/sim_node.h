@@ -29,6 +29,7 @@
 #include "implicit_sim/ApplyBodyWrench.h"
 #include "implicit_sim/BodyWrench.h"
 #include "implicit_sim/Delete.h"
+#include "implicit_sim/FollowTrajectoryAction.h"
 #include "implicit_sim/GetBodyState.h"
 #include "implicit_sim/JointCommand.h"
 #include "implicit_sim/LoadScene.h"
@@ -114,6 +115,8 @@ class SimNode {
   bool StartJob(uint64_t steps, uint64_t max_steps, std::string* refusal);  // physics thread
   bool OnStep(implicit_sim::Step::Request& req, implicit_sim::Step::Response& res);
   void OnRunStepsGoal(const implicit_sim::RunStepsGoalConstPtr& goal);
+  // node_follow_trajectory.cpp: ~follow_trajectory.
+  void OnFollowTrajectoryGoal(const implicit_sim::FollowTrajectoryGoalConstPtr& goal);
   // node_services.cpp: services and command topics (applied on the physics thread through the mailbox).
   void AdvertiseServices();
   bool OnPause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
@@ -167,6 +170,7 @@ class SimNode {
   std::vector<ros::ServiceServer> services_;
   ros::Subscriber wrench_sub_, joint_effort_sub_, joint_command_sub_, joint_trajectory_sub_;
   std::unique_ptr<actionlib::SimpleActionServer<implicit_sim::RunStepsAction>> run_steps_server_;
+  std::unique_ptr<actionlib::SimpleActionServer<implicit_sim::FollowTrajectoryAction>> follow_trajectory_server_;
   std::thread physics_thread_, publish_thread_, diagnostics_thread_;
 };
 

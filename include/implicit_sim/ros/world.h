@@ -34,6 +34,7 @@ struct DragSpring {
 
 // A ~joint_trajectory being followed (world_drives.cpp); times in s, positions in rad or m.
 struct Trajectory {
+  uint64_t id = 0;          // unique for the node's life (StartTrajectory): ~follow_trajectory finds its own by it
   std::vector<int> joints;  // model joints; -1 where a later command took the joint over
   double start = 0.0;       // simulation time of time_from_start = 0 (s)
   std::vector<double> times, from;  // time_from_start of each point; the joints' positions at the start

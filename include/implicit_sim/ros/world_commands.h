@@ -51,10 +51,17 @@ bool SetJointDrives(const CommandContext& context, const implicit_sim::JointComm
 // ~joint_trajectory: followed from its stamp (0: now) with the live drive gains.
 bool StartTrajectory(const CommandContext& context, const trajectory_msgs::JointTrajectory& msg, World* world,
                      std::string* error);
+bool StartTrajectory(const CommandContext& context, const trajectory_msgs::JointTrajectory& msg, World* world,
+                     std::string* error, uint64_t* id);  // *id: its Trajectory::id
 
 // The drives the trajectories give for the step ending at t_end (s); finished trajectories are dropped, their drives
 // keep holding the last point.
 void UpdateTrajectoryDrives(double t_end, World* world);
+// The drive targets of joint i of `trajectory` at simulation time t (s): the cubic Hermite curve clamped to the joint's
+// limits, the start position before it starts, the last point after it ends.
+void TrajectoryTargetAt(const Trajectory& trajectory, size_t i, const Joint& joint, double t, double* p, double* v);
+// Ends the trajectory of this id (if it still runs): its joints' drives hold where the joints are, at rest.
+void StopTrajectory(uint64_t id, World* world);
 
 // A mouse drag's event applied to the World's drag springs (world_drives.cpp): a grab adds a spring at the clicked
 // point, a move pulls it along, a release removes it.
