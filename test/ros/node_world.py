@@ -13,7 +13,10 @@
   and ~set_joint_positions sets its configuration exactly or refuses (unknown joint, NaN, unequal lengths, an overlap
   with the ground) changing nothing;
 - a spawned ball with a contact sensor and an IMU (<implicit_sim><sensor>) resting on the ground publishes on
-  ~sensors/<prefix><name>: its weight through the contact sensor, +g upwards from the IMU, at the sensors' rates."""
+  ~sensors/<prefix><name>: its weight through the contact sensor, +g upwards from the IMU, at the sensors' rates;
+- the Panda as published spawns beside the UR5, and both, held by their drives with the gravity feed-forward
+  (~drive_gravity_compensation, set by node_world.test), run 5 s at real time with every step converged and every
+  joint within 1e-4 rad of its target."""
 import os
 import statistics
 import struct
@@ -26,7 +29,7 @@ import rosgraph
 import rospy
 import rostest
 from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
-from implicit_sim.msg import BodyStates, ContactSensor
+from implicit_sim.msg import BodyStates, ContactSensor, JointCommand, StepStats
 from implicit_sim.scene import Scene, Shape
 from implicit_sim.srv import Delete, GetBodyState, LoadScene, SetJointPositions, Spawn
 from sensor_msgs.msg import Imu, JointState
@@ -266,6 +269,37 @@ class NodeWorld(unittest.TestCase):
             self.assertGreater(len(gaps), 5, name)
             self.assertAlmostEqual(statistics.median(gaps), 1.0 / rate, delta=0.011, msg=name)
         self.assertTrue(call("delete", Delete, ["s_ball"]).success)
+
+
+    def test_8_vendor_arms_held_by_their_drives_run_at_real_time(self):
+        self.assertTrue(call("unpause", Trigger).success)
+        ready = {"panda_joint1": 0.0, "panda_joint2": -0.785, "panda_joint3": 0.0, "panda_joint4": -2.356,
+                 "panda_joint5": 0.0, "panda_joint6": 1.571, "panda_joint7": 0.785, "panda_finger_joint1": 0.02}
+        res = call("spawn", Spawn, file="package://franka_description/robots/panda_gazebo.urdf", prefix="panda/",
+                   pose=pose(-2.0, 0.0, 0.0), joint_names=list(ready), joint_positions=list(ready.values()))
+        self.assertTrue(res.success, res.message)
+        q = self.joint_positions()
+        targets = {"panda/" + name: value for name, value in ready.items()}
+        targets.update({name: value for name, value in q.items() if name.startswith("ur/")})
+        commands = rospy.Publisher(NODE + "/joint_command", JointCommand, queue_size=1, latch=True)
+        n = len(targets)
+        commands.publish(JointCommand(name=list(targets), position=list(targets.values()), velocity=[],
+                                      stiffness=[5000.0] * n, damping=[100.0] * n))
+        time.sleep(1.0)  # the command is in force, the arms settle
+        stats = []
+        sub = rospy.Subscriber(NODE + "/step_stats", StepStats, stats.append)
+        time.sleep(5.0)
+        sub.unregister()
+        simulated = stats[-1].header.stamp.to_sec() - stats[0].header.stamp.to_sec()
+        print("[ INFO ] UR5 and Panda held: %d steps, %.2f s simulated in 5 s of wall time, %d not converged"
+              % (len(stats), simulated, sum(not s.converged for s in stats)), flush=True)
+        self.assertTrue(all(s.converged for s in stats))
+        self.assertGreater(simulated, 4.5)  # real time (the node's factor is 1), give or take a slow moment
+        q = self.joint_positions()
+        for name, target in targets.items():
+            if name == "panda/panda_finger_joint1":
+                continue  # a prismatic finger: metres, at its limit
+            self.assertAlmostEqual(q[name], target, delta=1e-4, msg=name)
 
 
 if __name__ == "__main__":
