@@ -3,12 +3,13 @@
 // (+-2 pi joints, 7 STL hulls), the Panda without <inertial> (several collisions per link, mimic fingers, franka's
 // <dynamics D K>) and the Panda with gazebo:=true. Each is held at a pose by PD drives for 1 s with every step
 // converged; the second finger is the first's mimic follower. Also a robot's configuration set by joint positions
-// (model/joint_configuration.h) and the hull cache of repeated loads.
+// (model/joint_configuration.h), the hull cache of repeated loads and the mimic fingers grasping a part.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <string>
@@ -16,9 +17,11 @@
 
 #include <gtest/gtest.h>
 
+#include "implicit_sim/core/io/scene_edit.h"
 #include "implicit_sim/core/model/joint_configuration.h"
 #include "implicit_sim/core/model/joints.h"
 #include "implicit_sim/core/model/urdf_loader.h"
+#include "implicit_sim/core/step/step_health.h"
 #include "implicit_sim/core/step/time_stepper.h"
 
 namespace implicit_sim {
@@ -139,6 +142,68 @@ TEST(VendorRobots, ThePandaLoadsAsPublishedWithItsFingersMimicking) {
   EXPECT_EQ(zero_pose_notes, 1);
 }
 
+
+// The Panda's mimic gripper grasps a part: a 0.02 x 0.03 x 0.02 m box (50 g) placed between the rubber tips of the
+// open fingers (0.04 m apart) at the ready pose, the arm held by drives, finger joint 1 driven closed (its mimic
+// follows). The fingers stop on the box's 0.03 m width, hold it (it drops while the fingers close, then stays), and no
+// body sinks into another (the penetration bound of every pair after every step).
+TEST(VendorRobots, ThePandasMimicFingersGraspAPart) {
+  const std::map<std::string, double> ready = {{"panda_joint2", -0.785}, {"panda_joint4", -2.356},
+                                               {"panda_joint6", 1.571}, {"panda_joint7", 0.785},
+                                               {"panda_finger_joint1", 0.02}};
+  std::vector<std::string> notes;
+  const std::string path = kVendorDir + "/franka_description/robots/panda_gazebo.urdf";
+  const Model arm = LoadVendor("franka_description/robots/panda_gazebo.urdf", ready, &notes);
+  const State arm_state = State::Initial(arm);
+  SceneAddition part;
+  part.urdf =
+      "<robot name='part'><link name='world'/><link name='part'><inertial><mass value='0.05'/><inertia "
+      "ixx='5.4e-6' iyy='3.3e-6' izz='5.4e-6' ixy='0' ixz='0' iyz='0'/></inertial><collision><geometry>"
+      "<box size='0.02 0.03 0.02'/></geometry></collision></link><joint name='part_joint' type='floating'>"
+      "<parent link='world'/><child link='part'/></joint></robot>";
+  // Between the tips: 0.0584 m to the finger joints, 0.04525 m on to the tips' centres, along the hand's z.
+  part.X_WO = arm_state.X_WL(arm, arm.FindBody("panda_hand")) * Eigen::Translation3d(0, 0, 0.0584 + 0.04525);
+  std::vector<std::string> added;
+  std::ifstream in(path);
+  const std::string panda((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  LoaderOptions options;
+  options.resolve_package_uri = [](const std::string& uri) {
+    return kVendorDir + "/" + uri.substr(std::string("package://").size());
+  };
+  options.joint_positions = ready;
+  options.warnings = &notes;
+  const Model model = LoadSceneFromString(AddToScene(panda, part, &added), "grasp", options);
+  const int box = model.FindBody("part"), finger = model.FindJoint("panda_finger_joint1");
+  const int follower = model.FindJoint("panda_finger_joint2");
+  StepperOptions stepper;
+  stepper.h = 0.005;
+  Data data(model);
+  State state = State::Initial(model);
+  for (int j = 0; j < static_cast<int>(model.joints.size()); ++j) {
+    if (!model.joints[j].has_coordinate() || model.joints[j].mimics()) continue;
+    data.joint_drives[j] = JointDrive{JointPosition(model, state, j), 0.0, 5000.0, 100.0, true};
+  }
+  data.joint_drives[finger] = JointDrive{0.0, 0.0, 1000.0, 10.0, false};  // close: 15 N on the 0.03 m box
+  int nonconverged = 0;
+  double z_grasped = 0.0, deepest = 0.0;
+  for (int i = 0; i < 200; ++i) {  // 1 s
+    nonconverged += !Step(model, stepper, &state, &data).converged;
+    if (i == 39) z_grasped = state.X_WB(model, box).translation().z();  // 0.2 s: closed
+    Data check(model);
+    deepest = std::max(deepest, MaxPenetrationBound(model, state, 1e-9, &check));
+  }
+  const double z_end = state.X_WB(model, box).translation().z();
+  const double q = JointPosition(model, state, finger), q_follower = JointPosition(model, state, follower);
+  std::printf("[ vendor ] Panda grasp: fingers at %.6f and %.6f m, the part moved %.2e m from 0.2 s to 1 s, "
+              "deepest overlap %.2e m, %d steps not converged\n", q, q_follower, z_end - z_grasped, deepest,
+              nonconverged);
+  EXPECT_EQ(nonconverged, 0);
+  // On the box's faces: a tip's inner face is 7.58 - 15.2 / 2 = -0.02 mm from the joint position, so q = 0.015 + 2e-5.
+  EXPECT_NEAR(q, 0.015 + 2e-5, 1e-6);
+  EXPECT_NEAR(q_follower, q, 1e-9);
+  EXPECT_LT(std::abs(z_end - z_grasped), 1e-6);
+  EXPECT_LT(deepest, 1e-6);
+}
 
 // ~set_joint_positions' core (model/joint_configuration.h) on the Panda: the named joints read back exactly what was
 // set, the mimic finger follows, the joints not named keep their positions, every joint equality holds to round-off,
