@@ -30,20 +30,29 @@ class LinkBodies {
   LinkBodies(const urdf::ModelInterface& urdf, const Model& model) : urdf_(urdf) {
     for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) index_[model.bodies[b].name] = b;
   }
-  int Of(std::string link) const {
-    while (link != "world") {
-      const auto it = index_.find(link);
-      if (it != index_.end()) return it->second;
-      const urdf::LinkConstSharedPtr l = urdf_.getLink(link);
-      if (!l || !l->parent_joint) return -1;
-      link = l->parent_joint->parent_link_name;
+  // Each link's answer is noted on the way up, so a chain of any depth costs its length once.
+  int Of(const std::string& link) {
+    std::vector<std::string> walked;
+    std::string at = link;
+    int body = -1;
+    while (at != "world") {
+      const auto it = index_.find(at);
+      if (it != index_.end()) {
+        body = it->second;
+        break;
+      }
+      walked.push_back(at);
+      const urdf::LinkConstSharedPtr l = urdf_.getLink(at);
+      if (!l || !l->parent_joint) break;
+      at = l->parent_joint->parent_link_name;
     }
-    return -1;
+    for (const std::string& name : walked) index_[name] = body;
+    return body;
   }
 
  private:
   const urdf::ModelInterface& urdf_;
-  std::unordered_map<std::string, int> index_;
+  std::unordered_map<std::string, int> index_;  // link name -> its body (its own or its nearest ancestor's; -1: none)
 };
 
 std::string RequireLink(const tinyxml2::XMLElement* e, const char* attribute, const urdf::ModelInterface& urdf,
@@ -56,7 +65,7 @@ std::string RequireLink(const tinyxml2::XMLElement* e, const char* attribute, co
 }  // namespace
 
 std::vector<std::pair<int, int>> ExcludeSelfCollisions(const tinyxml2::XMLElement* sim, const urdf::ModelInterface& urdf, Model* model) {
-  const LinkBodies bodies(urdf, *model);
+  LinkBodies bodies(urdf, *model);
   const int n = static_cast<int>(model->bodies.size());
   std::vector<int> robot(n);
   std::iota(robot.begin(), robot.end(), 0);

@@ -39,10 +39,24 @@ Pose JointMotion(const urdf::Joint& joint, double q) {
   return X;
 }
 
-int Depth(const urdf::Link& link) {
-  int depth = 0;
-  for (urdf::LinkConstSharedPtr l = link.getParent(); l; l = l->getParent()) ++depth;
-  return depth;
+// The number of links above `link`, each link's counted once per `known` (iteratively: a chain of any depth).
+int Depth(const urdf::Link& link, std::unordered_map<const urdf::Link*, int>* known) {
+  std::vector<const urdf::Link*> chain;  // from `link` upwards: the links whose depth is still to find
+  const urdf::Link* l = &link;
+  int depth = -1;
+  while (true) {
+    const auto found = known->find(l);
+    if (found != known->end()) {
+      depth = found->second;
+      break;
+    }
+    chain.push_back(l);
+    const urdf::LinkConstSharedPtr parent = l->getParent();  // the ModelInterface owns its links
+    if (!parent) break;
+    l = parent.get();
+  }
+  for (auto it = chain.rbegin(); it != chain.rend(); ++it) (*known)[*it] = ++depth;
+  return (*known)[&link];
 }
 
 }  // namespace
@@ -176,11 +190,13 @@ JointStarts ReadJointStarts(const tinyxml2::XMLElement* sim, const urdf::ModelIn
   return starts;
 }
 
-bool IsWeldedToWorld(const urdf::Link& link, const RootPlacement& root) {
-  const urdf::JointConstSharedPtr joint = link.parent_joint;
-  if (!joint) return root.fixed;  // the root link
-  if (joint->type != urdf::Joint::FIXED) return false;
-  return IsWeldedToWorld(*link.getParent(), root);
+bool IsWeldedToWorld(const urdf::Link& link, const RootPlacement& root,
+                     std::unordered_map<const urdf::Link*, bool>* known) {
+  return FirstValueUp(link, known, [&](const urdf::Link& l) -> std::optional<bool> {
+    if (!l.parent_joint) return root.fixed;  // the root link
+    if (l.parent_joint->type != urdf::Joint::FIXED) return false;
+    return std::nullopt;
+  });
 }
 
 bool IsFrameLink(const urdf::Link& link) {
@@ -188,15 +204,35 @@ bool IsFrameLink(const urdf::Link& link) {
          link.parent_joint->type == urdf::Joint::FIXED;
 }
 
-Pose InitialLinkPose(const urdf::Link& link, const JointStarts& starts, const RootPlacement& root) {
-  const urdf::JointConstSharedPtr joint = link.parent_joint;
-  if (!joint) return root.X_W_root;  // the root link ('world': identity)
-  const auto start = starts.find(joint->name);
-  const double q = start == starts.end() ? 0.0 : start->second.position;
-  const Pose X_WP = InitialLinkPose(*link.getParent(), starts, root);
-  const Pose X_PJ = ToPose(joint->parent_to_joint_origin_transform);
-  if (!X_PJ.matrix().allFinite()) Fail(JointWhere(*joint) + ": origin must be finite");
-  return X_WP * X_PJ * JointMotion(*joint, q);
+const Pose& InitialLinkPoses::Of(const urdf::Link& link) {
+  // Up to the first link whose pose is known (or the root), then down again, noting each pose on the way. The links
+  // belong to the urdf::ModelInterface, so the raw pointers stay valid.
+  std::vector<const urdf::Link*> chain;  // from `link` upwards: the links whose pose is still to find
+  const urdf::Link* l = &link;
+  Pose X_WP;
+  while (true) {
+    const auto found = known_.find(l);
+    if (found != known_.end()) {
+      X_WP = found->second;
+      break;
+    }
+    if (!l->parent_joint) {
+      X_WP = known_[l] = root_.X_W_root;  // the root link ('world': identity)
+      break;
+    }
+    chain.push_back(l);
+    l = l->getParent().get();
+  }
+  for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
+    const urdf::Joint& joint = *(*it)->parent_joint;
+    const auto start = starts_.find(joint.name);
+    const double q = start == starts_.end() ? 0.0 : start->second.position;
+    const Pose X_PJ = ToPose(joint.parent_to_joint_origin_transform);
+    if (!X_PJ.matrix().allFinite()) Fail(JointWhere(joint) + ": origin must be finite");
+    X_WP = X_WP * X_PJ * JointMotion(joint, q);
+    known_[*it] = X_WP;
+  }
+  return known_.at(&link);
 }
 
 namespace {
@@ -297,12 +333,17 @@ std::string NearestBodyLink(const urdf::ModelInterface& urdf, const Model& model
 }  // namespace
 
 void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, const RootPlacement& root,
-                 Model* model, LoadNotes* notes) {
+                 InitialLinkPoses* poses, Model* model, LoadNotes* notes) {
   std::vector<urdf::JointSharedPtr> ordered;
-  for (const auto& [name, joint] : urdf.joints_) ordered.push_back(joint);
+  std::unordered_map<const urdf::Link*, int> depths;
+  std::unordered_map<const urdf::Joint*, int> child_depth;
+  for (const auto& [name, joint] : urdf.joints_) {
+    ordered.push_back(joint);
+    child_depth[joint.get()] = Depth(*urdf.getLink(joint->child_link_name), &depths);
+  }
   // Parents before children: by depth below 'world', then by name (a strict total order: no stable sort needed).
   std::sort(ordered.begin(), ordered.end(), [&](const auto& x, const auto& y) {
-    const int dx = Depth(*urdf.getLink(x->child_link_name)), dy = Depth(*urdf.getLink(y->child_link_name));
+    const int dx = child_depth[x.get()], dy = child_depth[y.get()];
     return dx != dy ? dx < dy : x->name < y->name;
   });
   for (const urdf::JointSharedPtr& u : ordered) {
@@ -335,7 +376,7 @@ void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, co
     const Pose X_AJ = X_AL * ToPose(u->parent_to_joint_origin_transform);  // in the parent body's link frame
     const Pose X_PA = joint.parent < 0 ? Pose::Identity() : model->bodies[joint.parent].X_BL;
     SetJointFrames(X_PA * X_AJ, child.X_BL, a, &joint);
-    const Pose X_WJ = InitialLinkPose(*urdf.getLink(parent_link), starts, root) * X_AJ;
+    const Pose X_WJ = poses->Of(*urdf.getLink(parent_link)) * X_AJ;
     SetChildVelocity(*model, joint, X_WJ, a, &child);
     model->joints.push_back(joint);
   }

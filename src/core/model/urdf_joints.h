@@ -2,6 +2,10 @@
 // joint starts of <implicit_sim><joint>, the initial link poses along the joint tree, and Model::joints.
 #pragma once
 
+#include <optional>
+#include <unordered_map>
+#include <vector>
+
 #include <map>
 #include <string>
 
@@ -38,13 +42,52 @@ struct RootPlacement {
   Pose X_W_root = Pose::Identity();
 };
 
+// The value of the first link at or above `link` for which `known` holds one or `stop` gives one (std::optional), noted
+// for every link walked: tree walks that cost a chain's length once per load, without recursion. The links belong to
+// the urdf::ModelInterface, so the keys stay valid.
+template <typename T, typename Stop>
+T FirstValueUp(const urdf::Link& link, std::unordered_map<const urdf::Link*, T>* known, Stop stop) {
+  std::vector<const urdf::Link*> walked;
+  const urdf::Link* l = &link;
+  T value{};
+  while (true) {
+    const auto found = known->find(l);
+    if (found != known->end()) {
+      value = found->second;
+      break;
+    }
+    walked.push_back(l);
+    const std::optional<T> own = stop(*l);
+    if (own) {
+      value = *own;
+      break;
+    }
+    l = l->getParent().get();
+  }
+  for (const urdf::Link* w : walked) (*known)[w] = value;
+  return value;
+}
+
 // Whether a chain of fixed joints welds the link to a fixed root (then it is a fixed body); a fixed root is welded.
-bool IsWeldedToWorld(const urdf::Link& link, const RootPlacement& root);
+// `known`: the answers so far of this load.
+bool IsWeldedToWorld(const urdf::Link& link, const RootPlacement& root,
+                     std::unordered_map<const urdf::Link*, bool>* known);
 // A link that only marks a frame on a moving link: no <inertial>, no <collision>, on a fixed joint. It is no body:
 // joints below it hang on its nearest ancestor that is one.
 bool IsFrameLink(const urdf::Link& link);
-// The initial pose of the link frame in the world: the joint origins and initial joint motions from the root down.
-Pose InitialLinkPose(const urdf::Link& link, const JointStarts& starts, const RootPlacement& root);
+// The initial poses of link frames in the world: the joint origins and initial joint motions from the root down. Each
+// link's pose is computed once per object, without recursion, so a chain of any depth costs its length. Throws
+// std::invalid_argument naming the joint for a non-finite origin.
+class InitialLinkPoses {
+ public:
+  InitialLinkPoses(const JointStarts& starts, const RootPlacement& root) : starts_(starts), root_(root) {}
+  const Pose& Of(const urdf::Link& link);
+
+ private:
+  const JointStarts& starts_;
+  const RootPlacement& root_;
+  std::unordered_map<const urdf::Link*, Pose> known_;
+};
 
 // Fills model->joints, parents before children, with every revolute, continuous and prismatic joint and every fixed
 // joint whose child moves, and gives each jointed child its initial velocity from its parent's and the joint's.
@@ -52,8 +95,8 @@ Pose InitialLinkPose(const urdf::Link& link, const JointStarts& starts, const Ro
 // empty; call before Model::Finalize.
 // A revolute joint whose range is 2 pi or wider keeps no limit rows (its angle is measured in one turn, where such a
 // limit is never reached from one side): one note in `notes`.
-void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, const RootPlacement& root, Model* model,
-                 LoadNotes* notes);
+void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, const RootPlacement& root,
+                 InitialLinkPoses* poses, Model* model, LoadNotes* notes);
 
 }  // namespace loader
 }  // namespace implicit_sim

@@ -508,6 +508,9 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
 
   std::vector<std::string> from_density;  // moving links whose mass came (in part) from kDefaultDensity
   std::vector<urdf::LinkSharedPtr> frame_links;  // links on moving links without a body
+  InitialLinkPoses initial_poses(joint_starts, placement);
+  std::unordered_map<const urdf::Link*, bool> welded;  // IsWeldedToWorld's answers
+  std::unordered_map<const urdf::Link*, int> carrier;  // a frame link's nearest body above
   std::vector<urdf::LinkSharedPtr> links;
   urdf_model->getLinks(links);
   std::map<std::string, urdf::LinkSharedPtr> by_name;
@@ -532,7 +535,7 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
     }
     Body body;
     body.name = name;
-    body.is_fixed = IsWeldedToWorld(*link, placement);
+    body.is_fixed = IsWeldedToWorld(*link, placement, &welded);
     if (!body.is_fixed && IsFrameLink(*link)) {  // a frame on a moving link: no body (placed below)
       frame_links.push_back(link);
       continue;
@@ -554,18 +557,19 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
       s.shape.X_BS = body.X_BL * s.X_LC * s.shape.X_BS;  // a mesh hull's S is off its collision frame
       body.shapes.push_back(std::move(s.shape));
     }
-    body.X_WB0 = InitialLinkPose(*link, joint_starts, placement) * X_LB;
+    body.X_WB0 = initial_poses.Of(*link) * X_LB;
     model.bodies.push_back(body);
   }
   if (model.bodies.empty()) Fail("scene '" + scene_name + "': no link besides 'world'");
   for (const urdf::LinkSharedPtr& link : frame_links) {
     FrameLink frame;
     frame.name = link->name;
-    urdf::LinkConstSharedPtr above = link->getParent();
-    while (model.FindBody(above->name) < 0) above = above->getParent();  // a moving frame hangs on a body
-    frame.body = model.FindBody(above->name);
+    frame.body = FirstValueUp(*link->getParent(), &carrier, [&](const urdf::Link& l) -> std::optional<int> {
+      const int b = model.FindBody(l.name);  // a moving frame hangs on a body
+      return b >= 0 ? std::optional<int>(b) : std::nullopt;
+    });
     const Body& body = model.bodies[frame.body];
-    frame.X_LF = (body.X_WB0 * body.X_BL).inverse() * InitialLinkPose(*link, joint_starts, placement);
+    frame.X_LF = (body.X_WB0 * body.X_BL).inverse() * initial_poses.Of(*link);
     model.frames.push_back(frame);
   }
 
@@ -601,7 +605,7 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
       }
     }
   }
-  BuildJoints(*urdf_model, joint_starts, placement, &model, &notes);
+  BuildJoints(*urdf_model, joint_starts, placement, &initial_poses, &model, &notes);
   const std::vector<std::pair<int, int>> not_self_colliding = ExcludeSelfCollisions(sim, *urdf_model, &model);
   model.Finalize([&](int i, int j) {
     for (const auto& key : {std::make_pair(model.bodies[i].name, model.bodies[j].name),

@@ -135,5 +135,28 @@ TEST(UrdfLoader, RefusesAMissingFile) {
   EXPECT_THROW(LoadSceneFromFile("/nonexistent/scene.urdf"), std::invalid_argument);
 }
 
+// A chain of 20,000 links (the audit's S1: recursion in the initial link poses overflowed the stack) loads: every tree
+// walk of the loader is iterative and notes what it found, so a chain costs its length. The frames' poses compose.
+TEST(UrdfLoader, AChainOfTwentyThousandLinksLoads) {
+  constexpr int kLinks = 20000;
+  std::string urdf =
+      "<robot name='chain'><link name='world'/><link name='l0'><inertial><mass value='0.01'/><inertia ixx='1e-6' "
+      "iyy='1e-6' izz='1e-6' ixy='0' ixz='0' iyz='0'/></inertial><collision><geometry><sphere radius='0.001'/>"
+      "</geometry></collision></link><joint name='j0' type='floating'><parent link='world'/><child link='l0'/>"
+      "<origin xyz='0 0 1'/></joint>";
+  for (int i = 1; i < kLinks; ++i) {
+    const std::string link = "l" + std::to_string(i), parent = "l" + std::to_string(i - 1);
+    urdf += "<link name='" + link + "'/><joint name='j" + std::to_string(i) + "' type='fixed'><parent link='" + parent +
+            "'/><child link='" + link + "'/><origin xyz='0 0 0.0001'/></joint>";
+  }
+  urdf += "</robot>";
+  const Model model = LoadSceneFromString(urdf, "chain");
+  ASSERT_EQ(model.bodies.size(), 1u);
+  ASSERT_EQ(model.frames.size(), static_cast<size_t>(kLinks - 1));
+  EXPECT_EQ(model.frames.back().name, "l" + std::to_string(kLinks - 1));
+  EXPECT_EQ(model.frames.back().body, 0);
+  EXPECT_NEAR(model.frames.back().X_LF.translation().z(), (kLinks - 1) * 1e-4, 1e-9);
+}
+
 }  // namespace
 }  // namespace implicit_sim
