@@ -200,6 +200,14 @@ void NodePublisher::PublishClockThrottled(double sim_time, bool force) {
 
 void NodePublisher::PublishStepStats(const StepReport& report, double sim_time, uint64_t step, double rtf) {
   if (stats_pub_.getNumSubscribers() == 0) return;
+  // Throttled like /clock (at most ~clock_rate per second of simulation time and 1000 per second of wall time), so
+  // tiny steps as fast as possible do not flood a bag; a step that did not converge or advance always goes out.
+  const double wall = WallSeconds();
+  const bool due = sim_time >= last_stats_time_ + 1.0 / live_().clock_rate - 1e-12 &&
+                   wall >= last_stats_wall_ + 1.0 / kMaxClockWallRate;
+  if (!due && report.converged && report.advanced) return;
+  last_stats_time_ = sim_time;
+  last_stats_wall_ = wall;
   stats_pub_.publish(conv::ToStepStatsMsg(report, sim_time, step, rtf, params_.world_frame));
 }
 

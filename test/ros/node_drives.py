@@ -7,7 +7,8 @@
 - bad commands are dropped whole and counted in /diagnostics;
 - ~follow_trajectory (implicit_sim/FollowTrajectory): a move within its goal tolerance succeeds with feedback; a path
   tolerance the drive cannot keep aborts (PATH_TOLERANCE_VIOLATED) and the joint holds where it was; a tolerance on a
-  joint the trajectory does not move is refused (INVALID_JOINTS); a cancelled goal is preempted."""
+  joint the trajectory does not move is refused (INVALID_JOINTS); a cancelled goal is preempted;
+- ~step_stats is throttled like /clock: 5000 steps of 1 ms at ~clock_rate 10 Hz give about 50 messages, 0.1 s apart."""
 import time
 import unittest
 
@@ -18,7 +19,7 @@ from actionlib_msgs.msg import GoalStatus
 import rostest
 from diagnostic_msgs.msg import DiagnosticArray
 from implicit_sim.msg import (FollowTrajectoryAction, FollowTrajectoryGoal, FollowTrajectoryResult, JointCommand,
-                              JointTolerance)
+                              JointTolerance, StepStats)
 from implicit_sim.srv import GetBodyState, Step
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
@@ -156,6 +157,23 @@ class NodeDrives(unittest.TestCase):
         action.cancel_goal()
         self.assertTrue(action.wait_for_result(rospy.Duration(10)))
         self.assertEqual(action.get_state(), GoalStatus.PREEMPTED)
+
+    def test_4_step_stats_are_throttled_like_the_clock(self):
+        client = dynamic_reconfigure.client.Client(NODE, timeout=10)
+        client.update_configuration({"clock_rate": 10.0})
+        stamps = []
+        sub = rospy.Subscriber(NODE + "/step_stats", StepStats, lambda m: stamps.append(m.header.stamp.to_sec()))
+        time.sleep(0.5)
+        self.assertTrue(call("step", Step, 5000).success)  # 5 s of simulation time, as fast as possible
+        time.sleep(0.5)
+        sub.unregister()
+        client.update_configuration({"clock_rate": 1000.0})
+        gaps = [b - a for a, b in zip(stamps, stamps[1:])]
+        print("[ INFO ] step_stats: %d messages over 5000 steps, gaps %.4f-%.4f s" % (len(stamps), min(gaps), max(gaps)),
+              flush=True)
+        self.assertGreaterEqual(len(stamps), 45)
+        self.assertLessEqual(len(stamps), 51)
+        self.assertGreaterEqual(min(gaps), 0.1 - 1e-6)
 
 
 if __name__ == "__main__":

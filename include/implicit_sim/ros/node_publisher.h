@@ -54,6 +54,7 @@ class NodePublisher {
   // /clock now (never backwards), or at most ~clock_rate per s of simulation time and 1000 per s of wall time.
   void PublishClock(double sim_time);
   void PublishClockThrottled(double sim_time, bool force);
+  // ~step_stats, throttled like /clock; steps that did not converge or advance always (physics thread).
   void PublishStepStats(const StepReport& report, double sim_time, uint64_t step, double rtf);
   void PublishStaticTf(const Model& model);
 
@@ -85,6 +86,7 @@ class NodePublisher {
   // With publish_joint_link_tf false: the links of robot_description when the node started, which
   // robot_state_publisher (it reads the parameter once) publishes. Links added later are published here.
   std::set<std::string> described_links_;
+  double last_stats_time_ = -1e300, last_stats_wall_ = -1e300;  // s: the last ~step_stats (physics thread only)
   const std::function<LiveParams()> live_;
   const SnapshotHook on_new_world_, on_cycle_;
   Memory memory_;  // publish thread
