@@ -3,7 +3,9 @@
 // (~joint_command, ~joint_trajectory); what each does to the world is in world_commands.h. Each runs on the physics
 // thread between two steps (the command topics without waiting); ~get_body_state reads the latest snapshot. The
 // command topics' messages take one path, received or replayed from a journal: journaled, applied, counted.
-#include "implicit_sim/ros/sim_node.h"  // first: its generated service type Step precedes the core's function Step
+#include "implicit_sim/ros/sim_node.h"
+
+#include "implicit_sim/core/step/step_health.h"  // first: its generated service type Step precedes the core's function Step
 
 #include <algorithm>
 #include <cmath>
@@ -148,10 +150,20 @@ bool SimNode::OnGetBodyState(implicit_sim::GetBodyState::Request& req, implicit_
 bool SimNode::OnSetBodyState(implicit_sim::SetBodyState::Request& req, implicit_sim::SetBodyState::Response& res) {
   return mailbox_.RunBetweenSteps([&] {
            std::string error;
-           const int b = FindBodyOrFail(*world_->model, req.state.name, true, &error);
-           res.success =
-               b >= 0 && conv::SetBodyStateFromMsg(*world_->model, b, req.state, &world_->state, &error);
+           const Model& model = *world_->model;
+           const int b = FindBodyOrFail(model, req.state.name, true, &error);
+           State next = world_->state;
+           res.success = b >= 0 && conv::SetBodyStateFromMsg(model, b, req.state, &next, &error);
+           std::string overlap;
+           Data check(model);
+           if (res.success && !req.allow_overlap &&
+               FindInitialOverlap(model, next, options_.overlap_tolerance, &check, &overlap)) {
+             res.success = false;
+             error = "refused: " + overlap + " (more than the overlap tolerance " +
+                     FormatNumber(options_.overlap_tolerance) + " m; allow_overlap accepts it)";
+           }
            if (res.success) {
+             world_->state = next;
              JournalUnreplayable("~set_body_state");
              ClearWarmStart(world_->data.get());  // the next step starts cold from the new configuration
              SaveSnapshot();

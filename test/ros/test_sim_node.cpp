@@ -248,6 +248,20 @@ TEST(SimNode, BadServiceCallsAreRefusedAndChangeNothing) {
   set.request.state = before;
   set.request.state.twist.linear.x = NAN;
   EXPECT_FALSE(Call(std::string("set_body_state"), set).response.success);
+  // Into sphere_a: refused as ~spawn refuses an overlap, unless allowed.
+  get.request.body = "sphere_a";
+  set.request.state = before;
+  set.request.state.pose.position = Call(std::string("get_body_state"), get).response.state.pose.position;
+  const implicit_sim::SetBodyState::Response overlapping = Call(std::string("set_body_state"), set).response;
+  EXPECT_FALSE(overlapping.success);
+  EXPECT_NE(overlapping.message.find("refused: pair '"), std::string::npos) << overlapping.message;
+  EXPECT_NE(overlapping.message.find("overlaps by up to"), std::string::npos) << overlapping.message;
+  ExpectSameState(Ball(), before);
+  set.request.allow_overlap = true;
+  EXPECT_TRUE(Call(std::string("set_body_state"), set).response.success);
+  set.request.state = before;
+  EXPECT_TRUE(Call(std::string("set_body_state"), set).response.success);
+  set.request.allow_overlap = false;
   implicit_sim::ApplyBodyWrench wrench;
   wrench.request.body = "nobody";
   wrench.request.duration = 1.0;

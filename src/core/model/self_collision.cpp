@@ -115,23 +115,22 @@ std::vector<std::pair<int, int>> ExcludeSelfCollisions(const tinyxml2::XMLElemen
 std::string SelfOverlapNote(const Model& model, const std::vector<std::pair<int, int>>& not_self_colliding) {
   constexpr double kReportedDepth = 1e-6;  // m: deeper than the round-off of hulls that touch
   constexpr size_t kNamed = 8;             // pairs named in the line; the rest are counted
-  // Rigid groups: bodies welded by fixed joints, and every fixed body (welded to the world). Neighbours are groups
-  // that a moving joint joins; they meet at their joint, as MoveIt's "Adjacent" pairs do, and are not reported.
+  // Rigid groups: bodies welded by fixed joints, and every fixed body with the world (entry n; a joint's parent -1).
+  // Neighbours are groups that a moving joint joins; they meet at their joint, as MoveIt's "Adjacent" pairs do, and
+  // are not reported.
   const int n = static_cast<int>(model.bodies.size());
-  std::vector<int> group(n);
+  std::vector<int> group(n + 1);
   std::iota(group.begin(), group.end(), 0);
-  int world = -1;
+  const auto node = [n](int body) { return body < 0 ? n : body; };
   for (int b = 0; b < n; ++b) {
-    if (!model.bodies[b].is_fixed) continue;
-    if (world < 0) world = b;
-    group[Root(&group, b)] = Root(&group, world);
+    if (model.bodies[b].is_fixed) group[Root(&group, b)] = Root(&group, n);
   }
   for (const Joint& joint : model.joints) {
-    if (joint.type == JointType::kFixed) group[Root(&group, joint.parent)] = Root(&group, joint.child);
+    if (joint.type == JointType::kFixed) group[Root(&group, node(joint.parent))] = Root(&group, joint.child);
   }
   std::set<std::pair<int, int>> neighbours;
   for (const Joint& joint : model.joints) {
-    const int a = Root(&group, joint.parent), b = Root(&group, joint.child);
+    const int a = Root(&group, node(joint.parent)), b = Root(&group, joint.child);
     neighbours.emplace(std::min(a, b), std::max(a, b));
   }
   std::vector<std::string> overlapping;
