@@ -1,6 +1,6 @@
 #include "implicit_sim/ros/node_sensors.h"
 
-#include <set>
+#include <algorithm>
 #include <utility>
 
 #include <sensor_msgs/Imu.h>
@@ -62,7 +62,9 @@ void NodeSensors::Sample(const Model& model, const State& before, const State& a
       msg.header.stamp = stamp;
       msg.header.frame_id = world_frame_;
       msg.link = sensor.link;
-      for (int c : contact_reading_.contacts) msg.contacts.push_back(conv::ToContactMsg(model, contacts[c].pair, contacts[c]));
+      for (int c : contact_reading_.contacts) {
+        msg.contacts.push_back(conv::ToContactMsg(model, contacts[c].pair, contacts[c]));
+      }
       msg.wrench.force = conv::ToVectorMsg(contact_reading_.force_W);
       msg.wrench.torque = conv::ToVectorMsg(contact_reading_.moment_W);
       by_sensor_[s]->publish(msg);

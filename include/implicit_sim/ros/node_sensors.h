@@ -31,7 +31,7 @@ class NodeSensors {
   ros::NodeHandle pnh_;
   const std::string world_frame_;
   const double contact_threshold_;  // N
-  std::map<std::string, ros::Publisher> publishers_;  // by sensor name, with the sensor's type in the key's topic
+  std::map<std::string, ros::Publisher> publishers_;  // by "<sensor name>/<type>": a topic keeps its type
   std::vector<ros::Publisher*> by_sensor_;            // per Model::sensors entry
   std::vector<double> next_time_;                     // s of simulation time
   ContactSensorReading contact_reading_;              // workspace
