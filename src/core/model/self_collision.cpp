@@ -13,6 +13,7 @@
 
 #include "implicit_sim/core/geometry/support.h"
 #include "loader_util.h"
+#include "urdf_joints.h"
 
 namespace implicit_sim {
 namespace loader {
@@ -28,31 +29,24 @@ int Root(std::vector<int>* parent, int i) {
 class LinkBodies {
  public:
   LinkBodies(const urdf::ModelInterface& urdf, const Model& model) : urdf_(urdf) {
-    for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) index_[model.bodies[b].name] = b;
+    for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) body_of_name_[model.bodies[b].name] = b;
   }
-  // Each link's answer is noted on the way up, so a chain of any depth costs its length once.
   int Of(const std::string& link) {
-    std::vector<std::string> walked;
-    std::string at = link;
-    int body = -1;
-    while (at != "world") {
-      const auto it = index_.find(at);
-      if (it != index_.end()) {
-        body = it->second;
-        break;
-      }
-      walked.push_back(at);
-      const urdf::LinkConstSharedPtr l = urdf_.getLink(at);
-      if (!l || !l->parent_joint) break;
-      at = l->parent_joint->parent_link_name;
-    }
-    for (const std::string& name : walked) index_[name] = body;
-    return body;
+    const urdf::LinkConstSharedPtr l = urdf_.getLink(link);
+    if (!l) return -1;
+    return FirstValueUp(*l, &known_, [&](const urdf::Link& at) -> std::optional<int> {
+      if (at.name == "world") return -1;
+      const auto it = body_of_name_.find(at.name);
+      if (it != body_of_name_.end()) return it->second;
+      if (!at.parent_joint) return -1;
+      return std::nullopt;
+    });
   }
 
  private:
   const urdf::ModelInterface& urdf_;
-  std::unordered_map<std::string, int> index_;  // link name -> its body (its own or its nearest ancestor's; -1: none)
+  std::unordered_map<std::string, int> body_of_name_;
+  std::unordered_map<const urdf::Link*, int> known_;  // answers so far (FirstValueUp)
 };
 
 std::string RequireLink(const tinyxml2::XMLElement* e, const char* attribute, const urdf::ModelInterface& urdf,

@@ -29,15 +29,20 @@ namespace {
 
 const std::string kVendorDir = std::string(IMPLICIT_SIM_SOURCE_DIR) + "/test/data/vendor";
 
-Model LoadVendor(const std::string& relative, const std::map<std::string, double>& positions,
-                 std::vector<std::string>* notes) {
+// package:// URIs into test/data/vendor, the joints' start positions, the loader's notes into *notes.
+LoaderOptions VendorOptions(const std::map<std::string, double>& positions, std::vector<std::string>* notes) {
   LoaderOptions options;
   options.resolve_package_uri = [](const std::string& uri) {
     return kVendorDir + "/" + uri.substr(std::string("package://").size());
   };
   options.joint_positions = positions;
   options.warnings = notes;
-  return LoadSceneFromFile(kVendorDir + "/" + relative, options);
+  return options;
+}
+
+Model LoadVendor(const std::string& relative, const std::map<std::string, double>& positions,
+                 std::vector<std::string>* notes) {
+  return LoadSceneFromFile(kVendorDir + "/" + relative, VendorOptions(positions, notes));
 }
 
 // Holds every driven joint (all with a coordinate but mimic followers) at its start position for `seconds`; returns
@@ -166,13 +171,7 @@ TEST(VendorRobots, ThePandasMimicFingersGraspAPart) {
   std::vector<std::string> added;
   std::ifstream in(path);
   const std::string panda((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  LoaderOptions options;
-  options.resolve_package_uri = [](const std::string& uri) {
-    return kVendorDir + "/" + uri.substr(std::string("package://").size());
-  };
-  options.joint_positions = ready;
-  options.warnings = &notes;
-  const Model model = LoadSceneFromString(AddToScene(panda, part, &added), "grasp", options);
+  const Model model = LoadSceneFromString(AddToScene(panda, part, &added), "grasp", VendorOptions(ready, &notes));
   const int box = model.FindBody("part"), finger = model.FindJoint("panda_finger_joint1");
   const int follower = model.FindJoint("panda_finger_joint2");
   StepperOptions stepper;
@@ -268,13 +267,9 @@ TEST(VendorRobots, SetJointPositionsPlacesThePandaExactly) {
 // hull from the cache, adds no hull note and gives the same model, shape for shape; an edited mesh file (other bytes
 // under the same name) and another scale are hulled again.
 TEST(VendorRobots, AHullCacheHullsEachMeshOnceByContent) {
-  LoaderOptions options;
-  options.resolve_package_uri = [](const std::string& uri) {
-    return kVendorDir + "/" + uri.substr(std::string("package://").size());
-  };
-  options.joint_positions = {{"panda_joint4", -2.356}};
-  options.hull_cache = std::make_shared<MeshHullCache>();
   std::vector<std::string> first_notes, second_notes;
+  LoaderOptions options = VendorOptions({{"panda_joint4", -2.356}}, &first_notes);
+  options.hull_cache = std::make_shared<MeshHullCache>();
   auto hull_notes = [](const std::vector<std::string>& notes) {
     int n = 0;
     for (const std::string& note : notes) n += note.find("replaced by its convex hull") != std::string::npos;
