@@ -1,5 +1,5 @@
-// implicit_sim_bench: speed and accuracy of the stepper on the paper scenes P1-P3 and the S1 pile, one JSON line per
-// run on stdout (see bench/README.md). Speed targets live here, never in timed tests.
+// implicit_sim_bench: speed and accuracy of the stepper on the paper scenes P1-P3, the S1 pile and the J1 jam (the
+// soak bin's gripper pressed into its spheres), one JSON line per run on stdout (see bench/README.md). Speed targets live here, never in timed tests.
 //   implicit_sim_bench                                   every case
 //   implicit_sim_bench --scenario S1 --shape ellipsoid --n 100 --duration 2 [--dt 0.005] [--seed 42]
 //   implicit_sim_bench --scenario P3 [--duration 5] [--dt 0.01] [--scenes-dir DIR]
@@ -34,7 +34,7 @@ namespace {
 using namespace implicit_sim;
 
 struct Case {
-  std::string scenario;  // P1, P2, P3, S1
+  std::string scenario;  // P1, P2, P3, S1, J1
   std::string variant;   // P: the scene file; S1: <shape>_n<N>
   double h = 0.01;       // s
   double duration = 1.0; // s
@@ -249,6 +249,7 @@ std::vector<Case> AllCases() {
       {"P2", "p2_sphere_spinning", 0.07, 1.4, "p2_sphere_spinning.urdf"},
       {"P2", "p2_sphere_spinning", 0.01, 1.4, "p2_sphere_spinning.urdf"},
       {"P3", "p3_sphere_on_two_spheres", 0.01, 5.0, "p3_sphere_on_two_spheres.urdf"},
+      {"J1", "soak_jam", 0.01, 2.0, "soak_jam.urdf"},  // the soak bin's gripper pressed into its spheres
   };
   for (PileShape shape : {PileShape::kSphere, PileShape::kEllipsoid}) {
     for (int n : {10, 100, 1000}) {
@@ -295,7 +296,7 @@ void ParseDumpRequest(const std::map<std::string, std::string>& values, int argc
 
 int main(int argc, char** argv) {
   const char* usage =
-      "usage: implicit_sim_bench [--scenario P1|P2|P3|S1] [--shape sphere|ellipsoid] [--n N] [--seed S] "
+      "usage: implicit_sim_bench [--scenario P1|P2|P3|S1|J1] [--shape sphere|ellipsoid] [--n N] [--seed S] "
       "[--duration T] [--dt H] [--max-wall S] [--scenes-dir DIR] [--dump-worst K --dump-dir DIR] [--set FIELD=VALUE]...";
   std::map<std::string, std::string> values;
   std::vector<std::pair<const OptionRow*, double>> overrides;  // --set, in the order given
@@ -373,7 +374,7 @@ int main(int argc, char** argv) {
         if (!found && values.count("--variant")) {
           throw std::invalid_argument("no case " + scenario + " with --variant '" + values["--variant"] + "'");
         }
-        if (!found) throw std::invalid_argument("--scenario must be P1, P2, P3 or S1, got '" + scenario + "'");
+        if (!found) throw std::invalid_argument("--scenario must be P1, P2, P3, S1 or J1, got '" + scenario + "'");
         if (values.count("--shape") || values.count("--n") || values.count("--seed")) {
           throw std::invalid_argument("--shape, --n and --seed apply to --scenario S1 only");
         }

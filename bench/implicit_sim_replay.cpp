@@ -117,7 +117,10 @@ void WriteTrace(const std::string& name, const NewtonTrace& trace, std::ostream*
   for (const NewtonTraceRow& row : trace.rows) {
     *out << "{\"case\": " << Quoted(name) << ", \"solve\": " << row.solve << ", \"iteration\": " << row.iteration
          << ", \"smoothing\": " << Json(row.smoothing) << ", \"residual\": " << Json(row.residual)
-         << ", \"step\": " << Json(row.step) << ", \"least_squares\": " << Json(row.least_squares) << "}\n";
+         << ", \"step\": " << Json(row.step) << ", \"least_squares\": " << Json(row.least_squares)
+         << ", \"largest_row\": " << Json(row.largest_row) << ", \"largest_row_index\": " << row.largest_row_index
+         << ", \"largest_row_name\": " << Quoted(row.largest_row_name)
+         << ", \"rows_above_floor\": " << row.rows_above_floor << "}\n";
   }
 }
 

@@ -111,16 +111,31 @@ def rounded_box(scene, name, mass, size):
                collision=Shape.superellipsoid(f"{x / 2:g} {y / 2:g} {z / 2:g}", 8, tool_size=size))
 
 
-def soak_bin():
+SOAK_COMMENT = ("20 spheres (r = 0.05 m, 0.1 kg)\n     resting in a 1 m x 1 m box of half-spaces, and a gripper of "
+                "rounded boxes above them: a\n     carriage on the vertical prismatic joint 'lift', a palm on the "
+                "revolute joint 'wrist' (about\n     z), two fingers on the prismatic joints 'left_slide' and "
+                "'right_slide'. The finger tips are\n     0.31 m + lift above the floor: below the tops of the spheres "
+                "for lift < -0.21 m.")
+
+
+def soak_bin(jam=False):
     """The soak benchmark's scene (bench/implicit_sim_soak.py): 20 spheres in the 1 m x 1 m box of the S1 pile and
-    a four-joint gripper above them (lift, wrist, two fingers) that reaches down into the spheres."""
-    scene = Scene("soak_bin", comment="Soak benchmark scene (bench/implicit_sim_soak.py, doc/scenes.md): 20 spheres "
-                  "(r = 0.05 m, 0.1 kg)\n     resting in a 1 m x 1 m box of half-spaces, and a gripper of rounded "
-                  "boxes above them: a\n     carriage on the vertical prismatic joint 'lift', a palm on the revolute "
-                  "joint 'wrist' (about\n     z), two fingers on the prismatic joints 'left_slide' and 'right_slide'. "
-                  "The finger tips are\n     0.31 m + lift above the floor: below the tops of the spheres for "
-                  "lift < -0.21 m.\n     " + GENERATED)
+    a four-joint gripper above them (lift, wrist, two fingers) that reaches down into the spheres. With jam, the
+    jam benchmark (implicit_sim_bench --scenario J1): constant joint efforts press the gripper down into the spheres
+    and squeeze its fingers together, which wedges fingers, spheres, floor and walls against each other."""
+    if jam:
+        scene = Scene("soak_jam", comment="Jam benchmark scene (implicit_sim_bench, scenario J1; doc/scenes.md): the "
+                      "soak bin's " + SOAK_COMMENT + "\n     The gripper starts at lift = -0.17 m, its fingers open; "
+                      "constant efforts push 'lift' down (-12 N, its\n     limit) and close the fingers (4 N each): "
+                      "they wedge among the spheres and stay pressed. " + GENERATED)
+    else:
+        scene = Scene("soak_bin", comment="Soak benchmark scene (bench/implicit_sim_soak.py, doc/scenes.md): "
+                      + SOAK_COMMENT + "\n     " + GENERATED)
     scene.friction(mu=0.5, e_t=1, e_o=1, e_r=0.01)
+    if jam:
+        scene.joint_start("lift", position=-0.17, effort=-12)
+        scene.joint_start("left_slide", position=-0.04, effort=4)
+        scene.joint_start("right_slide", position=0.04, effort=-4)
     box_walls(scene, 0.5)
     rounded_box(scene, "carriage", 0.2, (0.04, 0.04, 0.04))
     scene.joint("lift", "prismatic", "world", "carriage", xyz="0 0 0.5", axis="0 0 1",
@@ -211,7 +226,8 @@ def scenes():
         result[f"p1_ngon{n}.urdf"] = p1(f"p1_ngon{n}", Shape.prism(n, 1, 0.1),
                                         f"polygonal disc: a regular {n}-gon prism, circumradius 1 m, a vertex down")
     result.update({"p2_sphere_spinning.urdf": p2(), "p3_sphere_on_two_spheres.urdf": p3(),
-                   "soak_bin.urdf": soak_bin(), "ellipsoid_rolling.urdf": ellipsoid_rolling(),
+                   "soak_bin.urdf": soak_bin(), "soak_jam.urdf": soak_bin(jam=True),
+                   "ellipsoid_rolling.urdf": ellipsoid_rolling(),
                    "pile_drop.urdf": pile_drop()})
     return result
 

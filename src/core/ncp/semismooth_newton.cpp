@@ -166,6 +166,13 @@ void SemismoothNewton::BeginSolve(const NcpProblem& problem, const NewtonOptions
 bool SemismoothNewton::Step(const NcpProblem& problem, const NewtonOptions& options, double merit, int iteration,
                             Eigen::VectorXd* z) {
   RememberMerit(merit);
+  NewtonTraceRow row{options.trace ? options.trace->solves - 1 : 0, iteration, mode_.smoothing, std::sqrt(2.0 * merit)};
+  if (options.trace) {
+    Eigen::Index largest = 0;
+    row.largest_row = Phi_.size() ? Phi_.cwiseAbs().maxCoeff(&largest) : 0.0;
+    row.largest_row_index = static_cast<int>(largest);
+    row.rows_above_floor = static_cast<int>((Phi_.array().abs() > 1e-13).count());
+  }
   // The LU direction first; where J is singular, the Levenberg-Marquardt one, a descent direction whenever
   // J^T Phi != 0. In dense mode also where the LU direction does not decrease the merit; in sparse mode that is
   // left to the retry ladder, because J^T J fills in (the 1000-gon's body couples to all its 1000 multipliers).
@@ -178,8 +185,9 @@ bool SemismoothNewton::Step(const NcpProblem& problem, const NewtonOptions& opti
     if (Direction(options, merit, true)) step = LineSearch(problem, options, *z, merit);
   }
   if (options.trace) {
-    options.trace->rows.push_back(
-        {options.trace->solves - 1, iteration, mode_.smoothing, std::sqrt(2.0 * merit), step, least_squares});
+    row.step = step;
+    row.least_squares = least_squares;
+    options.trace->rows.push_back(row);
   }
   if (step == 0.0) return false;  // no decrease: stalled (Phi_ still belongs to *z)
   z->swap(z_trial_);

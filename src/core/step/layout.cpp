@@ -207,4 +207,36 @@ void StepLayout::UpdateTangentAxes(Eigen::VectorXd* z) {
   }
 }
 
+std::string StepLayout::RowName(int row) const {
+  if (row < 0 || row >= size_) return "row " + std::to_string(row) + " (outside the layout)";
+  if (row < 6 * static_cast<int>(slots_.size())) {
+    static const char* const kAxes[6] = {"v_x", "v_y", "v_z", "w_x", "w_y", "w_z"};
+    return "body '" + model_.bodies[model_.moving_bodies[slots_[row / 6]]].name + "' " + kAxes[row % 6];
+  }
+  if (row < pair_base_) {
+    for (int j : joints_) {
+      if (row >= joint_offset_[j] && row < joint_offset_[j] + joint_size(j)) {
+        return "joint '" + model_.joints[j].name + "' " + std::to_string(row - joint_offset_[j]);
+      }
+    }
+  }
+  for (const PairBlock& blk : blocks_) {
+    if (row < blk.offset || row >= blk.offset + blk.size()) continue;
+    using namespace pair_index;
+    const int i = row - blk.offset;
+    std::string what;
+    if (i < kN) what = (i < kA2 ? "a1_" : "a2_") + std::string(1, "xyz"[i % 3]);
+    else if (i < kD) what = std::string("n_") + "xyz"[i - kN];
+    else if (i == kD) what = "d";
+    else if (i < kAlpha) what = i == kSt ? "s_t" : i == kSo ? "s_o" : "s_r";
+    else if (row < blk.beta()) what = "alpha " + std::to_string(row - blk.offset - kAlpha);
+    else if (row < blk.normal_force()) what = "beta " + std::to_string(row - blk.beta());
+    else if (row == blk.normal_force()) what = "ln";
+    else if (row == blk.sigma()) what = "sigma";
+    else what = row == blk.roll() ? "s_q1" : "s_q2";
+    return "pair '" + model_.PairName(blk.pair) + "' " + what;
+  }
+  return "row " + std::to_string(row);
+}
+
 }  // namespace implicit_sim

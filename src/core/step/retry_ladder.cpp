@@ -31,9 +31,17 @@ struct Ladder {
   IslandSolve& work;
   StepReport* report;
   NcpSummary Solve(const NewtonOptions& newton, double smoothing = 0.0) {
+    const size_t traced = newton.trace ? newton.trace->rows.size() : 0;
     const NcpSummary summary = solver.Solve(problem, newton, &z, smoothing);
     Count(summary);
+    NameTracedRows(newton.trace, traced);
     return summary;
+  }
+  // Names the largest row of the trace rows from `first` on.
+  void NameTracedRows(NewtonTrace* trace, size_t first) const {
+    for (size_t k = first; trace && k < trace->rows.size(); ++k) {
+      trace->rows[k].largest_row_name = problem.layout().RowName(trace->rows[k].largest_row_index);
+    }
   }
   // Adds a solve's iterations and residual evaluations to the report.
   void Count(const NcpSummary& summary) {
@@ -99,7 +107,9 @@ bool ProjectedRetry(const StepperOptions& projected_options, Ladder* ladder, Ncp
 bool SmoothingPath(const StepperOptions& options, Ladder* ladder, NcpSummary* first) {
   ladder->report->path_solves++;
   ladder->z = ladder->work.z_start;
+  const size_t traced = options.newton.trace ? options.newton.trace->rows.size() : 0;
   const NcpSummary path = ladder->solver.FollowSmoothingPath(ladder->problem, options.newton, PathOptions(), &ladder->z);
+  ladder->NameTracedRows(options.newton.trace, traced);
   ladder->Count(path);
   ladder->report->path_iterations += path.path_iterations;
   if (std::isfinite(path.switch_smoothing)) {

@@ -59,9 +59,9 @@ TEST(Tunnelling, NoConvergedStepCarriesABodyThroughAThinWall) {
           const double ke0 = KineticEnergy(model, state);
           bool through = false, beyond = false, all_converged = true;
           for (int i = 0; i < 10; ++i) {
+            const Vec3 before = state.q.head<3>();  // the start of this step
             const StepReport report = Step(model, options, &state, &data);
             all_converged = all_converged && report.converged;
-            const Vec3 before = state.q.head<3>();
             if (!report.advanced) break;  // refused (a crossing in the shortest sub-step): the state stays
             // Energy is only asserted while every step so far converged: an accepted non-converged iterate (the
             // ladder's best, reported) may penetrate, and what it injects stays (doc/method.md).
@@ -71,7 +71,7 @@ TEST(Tunnelling, NoConvergedStepCarriesABodyThroughAThinWall) {
           }
           ++runs;
           if (!beyond) ++stopped;
-          if (beyond && !through) ++around;  // deflected sideways past the rim (the RATTLE step, 1 run of 24)
+          if (beyond && !through) ++around;  // deflected sideways past the rim
           if (through) {
             ++reported;
             EXPECT_FALSE(all_converged) << "a converged run went through the wall";
@@ -85,9 +85,12 @@ TEST(Tunnelling, NoConvergedStepCarriesABodyThroughAThinWall) {
   RecordProperty("through_but_reported_not_converged", reported);
   RecordProperty("around_the_rim", around);
   // Before FindCrossing about half the runs went through, silently; with it and the monotone line search 4 of 24 still
-  // did (their shortest sub-steps not converged, reported); with the non-monotone search none does.
-  EXPECT_EQ(stopped + around, runs);
-  EXPECT_LE(around, 1);
+  // did (their shortest sub-steps not converged, reported). Today two do, reported: the ellipsoid at 60 and 100 m/s
+  // into the box (doc/method.md, "Tunnelling"). A head-on shot never gets a sideways speed that carries it past the
+  // rim within 0.1 s.
+  EXPECT_EQ(stopped + reported, runs);
+  EXPECT_EQ(around, 0);
+  EXPECT_LE(reported, 2);
 }
 
 }  // namespace

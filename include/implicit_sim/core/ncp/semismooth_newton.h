@@ -41,6 +41,10 @@ struct NewtonTraceRow {
   double residual = 0.0;     // |Phi_mu|_2 at the iterate, before the step
   double step = 0.0;         // the line search's step length (0: no step was accepted)
   bool least_squares = false;  // the step followed the Levenberg-Marquardt direction
+  double largest_row = 0.0;    // max_i |Phi_mu,i| at the iterate
+  int largest_row_index = -1;  // its row i
+  std::string largest_row_name;  // what row i is (StepLayout::RowName), where the caller names rows
+  int rows_above_floor = 0;    // how many rows have |Phi_mu,i| > 1e-13 (a round-off floor shows as many small rows)
 };
 struct NewtonTrace {
   std::vector<NewtonTraceRow> rows;

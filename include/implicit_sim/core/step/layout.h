@@ -22,6 +22,7 @@
 //     sigma              slip multiplier (m/s): the generalized slip speed at a sliding contact
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -106,6 +107,9 @@ class StepLayout {
 
   // Per row: how its unknown enters a complementarity condition in the paper's step (problems narrow it down).
   const std::vector<RowKind>& row_kinds() const { return row_kinds_; }
+  // What row `row` of the step problem is, for traces: e.g. "body 'ball_3' w_y", "joint 'lift' 2",
+  // "pair 'ball_3-floor' sigma" (the unknown of its complementarity, or its closest-point coordinate).
+  std::string RowName(int row) const;
   // Per body row (the first 6 slots().size() rows): the velocity is locked (Body::locked).
   const std::vector<char>& locked_rows() const { return locked_row_; }
   // One block per pair: its closest-point unknowns a1, a2, n, d, alpha, beta (NcpProblem::CondensableBlocks).
