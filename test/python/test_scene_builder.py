@@ -14,7 +14,7 @@ from implicit_sim.scene import Scene, Shape, text
 def test_make_scenes_writes_the_committed_scenes(tmp_path):
     subprocess.run([sys.executable, str(REPO / "scripts" / "make_scenes.py"), "--out", str(tmp_path)], check=True)
     written = sorted(p.name for p in tmp_path.iterdir())
-    assert len(written) == 11
+    assert len(written) == 12
     for name in written:
         assert (tmp_path / name).read_text() == (SCENES / name).read_text(), f"scenes/{name} is not make_scenes' output"
 
