@@ -120,7 +120,9 @@ void WriteTrace(const std::string& name, const NewtonTrace& trace, std::ostream*
          << ", \"step\": " << Json(row.step) << ", \"least_squares\": " << Json(row.least_squares)
          << ", \"largest_row\": " << Json(row.largest_row) << ", \"largest_row_index\": " << row.largest_row_index
          << ", \"largest_row_name\": " << Quoted(row.largest_row_name)
-         << ", \"rows_above_floor\": " << row.rows_above_floor << "}\n";
+         << ", \"rows_above_floor\": " << row.rows_above_floor << ", \"largest_move\": " << Json(row.largest_move)
+         << ", \"largest_move_index\": " << row.largest_move_index
+         << ", \"largest_move_name\": " << Quoted(row.largest_move_name) << "}\n";
   }
 }
 

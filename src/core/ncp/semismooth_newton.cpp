@@ -187,6 +187,9 @@ bool SemismoothNewton::Step(const NcpProblem& problem, const NewtonOptions& opti
   if (options.trace) {
     row.step = step;
     row.least_squares = least_squares;
+    Eigen::Index largest = 0;
+    row.largest_move = dz_.size() ? dz_.cwiseAbs().maxCoeff(&largest) : 0.0;
+    row.largest_move_index = static_cast<int>(largest);
     options.trace->rows.push_back(row);
   }
   if (step == 0.0) return false;  // no decrease: stalled (Phi_ still belongs to *z)

@@ -41,6 +41,7 @@ struct Ladder {
   void NameTracedRows(NewtonTrace* trace, size_t first) const {
     for (size_t k = first; trace && k < trace->rows.size(); ++k) {
       trace->rows[k].largest_row_name = problem.layout().RowName(trace->rows[k].largest_row_index);
+      trace->rows[k].largest_move_name = problem.layout().RowName(trace->rows[k].largest_move_index);
     }
   }
   // Adds a solve's iterations and residual evaluations to the report.

@@ -44,6 +44,9 @@ struct NewtonTraceRow {
   double largest_row = 0.0;    // max_i |Phi_mu,i| at the iterate
   int largest_row_index = -1;  // its row i
   std::string largest_row_name;  // what row i is (StepLayout::RowName), where the caller names rows
+  double largest_move = 0.0;     // max_j |dz_j| of the direction taken (the LU's, or the LM one after it)
+  int largest_move_index = -1;   // its unknown j
+  std::string largest_move_name;  // what unknown j is (the row of the same index), where the caller names rows
   int rows_above_floor = 0;    // how many rows have |Phi_mu,i| > 1e-13 (a round-off floor shows as many small rows)
 };
 struct NewtonTrace {
