@@ -69,35 +69,54 @@ void SetPairs(const Model& model, const State& state, const std::vector<int>& pa
 bool CertifiedApart(const ConvexShape& shape1, const Pose& X_WB1, const ConvexShape& shape2, const Pose& X_WB2,
                     double clearance) {
   if (shape1.type == ShapeType::kSphere && shape2.type == ShapeType::kSphere) return false;
+  // A half-space (z <= 0 in its frame S) has one such n, its outward normal: exact, and the descent's start along the
+  // line between the frames would see an infinite support.
+  const bool plane1 = shape1.type == ShapeType::kHalfSpace, plane2 = shape2.type == ShapeType::kHalfSpace;
+  if (plane1 != plane2) {
+    const Pose X_WS = (plane1 ? X_WB1 : X_WB2) * (plane1 ? shape1 : shape2).X_BS;
+    const Vec3 n_W = X_WS.linear().col(2);
+    Vec3 p_W;  // the other shape's point deepest along -n
+    if (!SupportPoint(plane1 ? shape2 : shape1, plane1 ? X_WB2 : X_WB1, -n_W, &p_W)) return false;
+    return n_W.dot(p_W - X_WS.translation()) > clearance;
+  }
   constexpr int kMaxDescentSteps = 30;
   return DescendCrossing(shape1, X_WB1, shape2, X_WB2, -clearance, kMaxDescentSteps).value < -clearance;
 }
 
-// Whether a candidate pair of two moving bodies can touch within the step by their relative motion (a common velocity
-// and gravity cancel): not if their bounding spheres at the start are apart by more than the relative motion of
-// their centres within the step (h |v1 - v2| + h |w_i| lever_i) plus the margin, nor if the shapes themselves are
-// certified apart by more than the relative motion of any of their points (h |v1 - v2| + h |w_i| (lever_i + R_i))
-// plus the margin. A layer of parts falling side by side then forms one island per part instead of one for the
-// layer, and packed ellipsoids whose bounding spheres overlap stay apart. (The end-of-step check still catches what
-// this misses.) X_WB: every body's pose at the start.
+// Whether a candidate pair can touch within the step by the relative motion of its bodies (for two moving bodies a
+// common velocity and gravity cancel; a fixed body does not move, and a moving body falls by g h^2 / 2 towards it):
+// not if their bounding spheres at the start are apart by more than the relative motion of their centres within the
+// step (h |v1 - v2| + h |w_i| lever_i) plus the margin, nor if the shapes themselves are certified apart by more than
+// the relative motion of any of their points (h |v1 - v2| + h |w_i| (lever_i + R_i)) plus the margin. A layer of
+// parts falling side by side then forms one island per part instead of one for the layer, packed ellipsoids whose
+// bounding spheres overlap stay apart, and a long flat part above the floor (whose bounding sphere reaches it) is no
+// pair of the NCP. (The end-of-step check still catches what this misses.) X_WB: every body's pose at the start.
 bool CanTouchWithinStep(const Model& model, const StepperOptions& options, double h, const State& state,
                         const std::vector<Pose>& X_WB, int pair) {
   const ContactPair& p = model.pairs[pair];
   const int k1 = model.velocity_slot[p.body1], k2 = model.velocity_slot[p.body2];
-  if (k1 < 0 || k2 < 0) return true;
   const ConvexShape& s1 = model.shape(p.geom1);
   const ConvexShape& s2 = model.shape(p.geom2);
+  const Vec3 zero = Vec3::Zero();
+  const Vec3& v1 = k1 < 0 ? zero : state.v_WB(k1);
+  const Vec3& v2 = k2 < 0 ? zero : state.v_WB(k2);
+  const double w1 = k1 < 0 ? 0.0 : state.w_WB(k1).norm(), w2 = k2 < 0 ? 0.0 : state.w_WB(k2).norm();
+  const double fall = k1 < 0 || k2 < 0 ? 0.5 * model.gravity_W.norm() * h * h : 0.0;
+  const double dv = (v1 - v2).norm();
   const double R1 = s1.BoundingRadius(), R2 = s2.BoundingRadius();
-  if (!std::isfinite(R1) || !std::isfinite(R2)) return true;
   const double lever1 = s1.X_BS.translation().norm(), lever2 = s2.X_BS.translation().norm();
-  const Vec3 c1 = X_WB[p.body1] * s1.X_BS.translation();
-  const Vec3 c2 = X_WB[p.body2] * s2.X_BS.translation();
-  const double gap = (c1 - c2).norm() - R1 - R2;
-  const double dv = (state.v_WB(k1) - state.v_WB(k2)).norm();
-  const double w1 = state.w_WB(k1).norm(), w2 = state.w_WB(k2).norm();
-  const double reach = h * (dv + w1 * lever1 + w2 * lever2) + options.broad_phase_margin;
-  if (gap > reach) return false;
-  const double sweep = h * (dv + w1 * (lever1 + R1) + w2 * (lever2 + R2)) + options.broad_phase_margin;
+  // A fixed body's shape moves not at all, whatever its size (a half-space's bounding radius is infinite).
+  const double motion1 = k1 < 0 ? 0.0 : w1 * (lever1 + R1), motion2 = k2 < 0 ? 0.0 : w2 * (lever2 + R2);
+  if (std::isfinite(R1) && std::isfinite(R2)) {
+    const Vec3 c1 = X_WB[p.body1] * s1.X_BS.translation();
+    const Vec3 c2 = X_WB[p.body2] * s2.X_BS.translation();
+    const double gap = (c1 - c2).norm() - R1 - R2;
+    const double reach = h * (dv + w1 * lever1 + w2 * lever2) + fall + options.broad_phase_margin;
+    if (gap > reach) return false;
+  } else if (!std::isfinite(motion1) || !std::isfinite(motion2)) {
+    return true;  // an unbounded moving shape
+  }
+  const double sweep = h * (dv + motion1 + motion2) + fall + options.broad_phase_margin;
   return !CertifiedApart(s1, X_WB[p.body1], s2, X_WB[p.body2], sweep);
 }
 
