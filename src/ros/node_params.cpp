@@ -46,7 +46,7 @@ void ReadOptionParams(const ros::NodeHandle& pnh, StepperOptions* options) {
 
 // The node's own private parameters besides the options table's.
 const char* const kNodeParams[] = {"scene", "scenes_dir", "paused", "on_fault", "world_frame", "publish_joint_link_tf",
-                                   "drive_gravity_compensation",
+                                   "drive_gravity_compensation", "min_real_time_fraction",
                                    "interactive_markers", "floating_root", "input_journal", "replay_journal"};
 
 void RefuseUnknownParams(const ros::NodeHandle& pnh) {
@@ -111,6 +111,11 @@ NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
   p.world_frame = ReadParam(pnh, "world_frame", p.world_frame);
   p.publish_joint_link_tf = ReadParam(pnh, "publish_joint_link_tf", p.publish_joint_link_tf);
   p.drive_gravity_compensation = ReadParam(pnh, "drive_gravity_compensation", p.drive_gravity_compensation);
+  p.min_real_time_fraction = ReadParam(pnh, "min_real_time_fraction", p.min_real_time_fraction);
+  if (!(p.min_real_time_fraction >= 0.0 && p.min_real_time_fraction <= 1.0)) {
+    throw std::invalid_argument("parameter ~min_real_time_fraction = " + FormatNumber(p.min_real_time_fraction) +
+                                " is out of range [0, 1] (0: never warn about the real-time factor)");
+  }
   p.interactive_markers = ReadParam(pnh, "interactive_markers", p.interactive_markers);
   p.floating_root = ReadParam(pnh, "floating_root", p.floating_root);
   p.input_journal = ReadParam(pnh, "input_journal", p.input_journal);

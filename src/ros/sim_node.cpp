@@ -37,7 +37,8 @@ SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   live_ = std::make_unique<LiveTuning>(pnh, params_.live, params_.options, [this] {
     mailbox_.Post([this] { JournalUnreplayable("~set_parameters"); });
   });
-  diagnostics_ = std::make_unique<NodeDiagnostics>(nh, pnh, "implicit_sim " + model.scene_name, paused_);
+  diagnostics_ = std::make_unique<NodeDiagnostics>(nh, pnh, "implicit_sim " + model.scene_name, paused_,
+                                                   params_.min_real_time_fraction);
   drag_markers_ = std::make_unique<DragMarkers>(pnh, params_.world_frame, params_.interactive_markers,
                                                 [this](const DragMarkers::Feedback& f) { OnDragFeedback(f); });
   publisher_ = std::make_unique<NodePublisher>(
@@ -120,7 +121,7 @@ CommandContext SimNode::Context() const {
   return CommandContext{SimTime(), live_->Live(), params_.world_frame, params_.drive_gravity_compensation};
 }
 
-bool SimNode::StepOnce(double rtf) {
+bool SimNode::StepOnce(double rtf, bool paced) {
   live_->CopySolverOptions(&options_);
   std::string replay_refusal;
   if (journal_->replaying() &&
@@ -135,6 +136,7 @@ bool SimNode::StepOnce(double rtf) {
   StepReport report;
   w.data->interrupt = &interrupt_;
   state_before_ = w.state;
+  diagnostics_->BeginStep();
   try {
     report = Step(*w.model, options_, &w.state, w.data.get(), &w.wrench_W);
   } catch (const std::exception& e) {
@@ -163,7 +165,10 @@ bool SimNode::StepOnce(double rtf) {
       ROS_ERROR("implicit_sim: step refused (%s); the simulation is paused", failure.c_str());
     }
   }
-  diagnostics_->CountStep(report, failure, paused_, SimTime(), rtf);
+  double penetration = 0.0;  // m
+  for (const ContactResult& contact : w.data->contacts) penetration = std::max(penetration, -contact.gap);
+  diagnostics_->CountStep(report, failure, paused_, SimTime(), rtf, paced ? live_->Live().real_time_factor : 0.0,
+                          penetration);
   if (!report.advanced) mailbox_.FailJob(SimTime(), failure);
   SaveSnapshot();
   publisher_->PublishClockThrottled(SimTime(), !report.advanced);
@@ -221,7 +226,7 @@ void SimNode::PhysicsLoop() {
     const PhysicsMailbox::Work work = mailbox_.WaitForWork(!paused_);
     if (work == PhysicsMailbox::Work::kStop) return;
     if (work == PhysicsMailbox::Work::kJobStep) {
-      if (StepOnce(0.0)) mailbox_.CountJobStep(SimTime());  // a refused step ends the job itself
+      if (StepOnce(0.0, false)) mailbox_.CountJobStep(SimTime());  // a refused step ends the job itself
       continue;
     }
     if (paused_) continue;
@@ -230,7 +235,7 @@ void SimNode::PhysicsLoop() {
       pace_sim = rtf_sim = SimTime();
       restart_pacing_ = false;
     }
-    StepOnce(rtf_);
+    StepOnce(rtf_, true);
     const double sim = SimTime();
     const auto now = WallClock::now();
     const double window = std::chrono::duration<double>(now - rtf_wall).count();

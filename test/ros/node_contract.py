@@ -5,7 +5,8 @@ scenes/cube_drop.urdf, real time, publish_rate 30 Hz, no /use_sim_time so the ti
 - /clock and /tf keep their rates; /tf never repeats a stamp; a paused simulation sends nothing again but /clock;
 - a bag of the resting cube holds at most 1/20 of the bytes per second it did before shapes were sent once;
 - during a ~run_steps goal of 1e6 steps, services, /clock and feedback stay responsive; the goal cancels within 1 s;
-- /diagnostics stays ERROR while a refused step holds the simulation, and OK again after ~reset;
+- /diagnostics stays ERROR while a refused step holds the simulation, and OK again after ~reset; WARN, naming the
+  slowest step and the ladder's rungs, while the simulation falls below half its real_time_factor;
 - SIGINT stops a second node within 2 s while it runs a 1e6-step goal;
 - every launch file declares every argument of sim.launch (with a doc) and passes them all on;
 - dragging a body's interactive marker holds it where a critically damped spring predicts; releasing drops it;
@@ -31,7 +32,7 @@ from xml.etree import ElementTree
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Point, Pose, Vector3, Wrench
 from implicit_sim.msg import BodyStates, RunStepsAction, RunStepsGoal
-from implicit_sim.srv import ApplyBodyWrench, GetBodyState
+from implicit_sim.srv import ApplyBodyWrench, Delete, GetBodyState, Spawn
 from rosgraph_msgs.msg import Clock
 from std_srvs.srv import Trigger
 from tf2_msgs.msg import TFMessage
@@ -48,9 +49,26 @@ def resolve(name):
     return NODE + "/" + name[1:] if name.startswith("~") else name
 
 
-def call(name, srv_type, *args):
+def call(name, srv_type, *args, **fields):
     rospy.wait_for_service(NODE + "/" + name, timeout=10)
-    return rospy.ServiceProxy(NODE + "/" + name, srv_type)(*args)
+    return rospy.ServiceProxy(NODE + "/" + name, srv_type)(*args, **fields)
+
+
+def sphere_stack_urdf(n, radius=0.05):
+    """n x n x n spheres of 0.1 kg in a cubic stack on the ground, 1 mm apart (it collapses when stepped)."""
+    pitch = 2 * radius + 0.001
+    parts = ['<robot name="stack"><link name="world"/>']
+    for i in range(n):
+        for j in range(n):
+            for k in range(n):
+                name = "ball_%d_%d_%d" % (i, j, k)
+                parts.append('<link name="%s"><inertial><mass value="0.1"/><inertia ixx="1e-4" ixy="0" ixz="0" '
+                             'iyy="1e-4" iyz="0" izz="1e-4"/></inertial><collision><geometry><sphere radius="%g"/>'
+                             '</geometry></collision></link>' % (name, radius))
+                parts.append('<joint name="%s_joint" type="floating"><parent link="world"/><child link="%s"/>'
+                             '<origin xyz="%g %g %g"/></joint>' % (name, name, i * pitch + 0.0003 * k, j * pitch,
+                                                                   radius + 0.001 + k * pitch))
+    return "".join(parts) + "</robot>"
 
 
 class Recorder:
@@ -219,6 +237,37 @@ class NodeContract(unittest.TestCase):
         self.assertTrue(call("reset", Trigger).success)
         time.sleep(1.2)
         self.assertEqual(rospy.wait_for_message("/diagnostics", DiagnosticArray, timeout=5).status[0].level, 0)
+
+    def test_5b_diagnostics_warn_while_the_simulation_falls_behind_its_real_time_factor(self):
+        # A 4 x 4 x 4 stack of spheres spawned 3 m away collapses: milliseconds a step, far behind a real_time_factor
+        # of 1000 (the resting cube alone keeps that pace); ~min_real_time_fraction is 0.5.
+        jam = call("spawn", Spawn, urdf=sphere_stack_urdf(4), prefix="stack/", pose=Pose(position=Point(3.0, 0.0, 0.0)))
+        self.assertTrue(jam.success, jam.message)
+        self.assertTrue(call("unpause", Trigger).success)
+        client = dynamic_reconfigure.client.Client(NODE, timeout=10)
+        client.update_configuration({"real_time_factor": 1000.0})
+        try:
+            time.sleep(2.2)  # the report of the second before the change holds the old pace's factor
+            warned = None
+            deadline = time.monotonic() + 6.0
+            while time.monotonic() < deadline and warned is None:
+                status = rospy.wait_for_message("/diagnostics", DiagnosticArray, timeout=5).status[0]
+                if status.level == 1:
+                    warned = status
+            self.assertIsNotNone(warned, "no WARN at real_time_factor 1000")
+            print("[ INFO ] %s" % warned.message, flush=True)
+            self.assertIn("below 0.5 of the requested 1000 (last second: slowest step", warned.message)
+            values = {kv.key: kv.value for kv in warned.values}
+            for key in ("slowest_step_s", "max_iterations_per_step", "cold_restarts", "proximal_solves",
+                        "smoothed_solves", "ipopt_solves", "substeps", "max_penetration_m"):
+                self.assertIn(key, values)
+            self.assertLess(float(values["real_time_factor"]), 500.0)
+        finally:
+            client.update_configuration({"real_time_factor": 1.0})
+            self.assertTrue(call("delete", Delete, jam.bodies).success)
+        time.sleep(2.2)  # a second at the old pace, then one at the new
+        levels = [rospy.wait_for_message("/diagnostics", DiagnosticArray, timeout=5).status[0].level for _ in range(2)]
+        self.assertEqual(levels[-1], 0, levels)
 
     def test_7_dynamic_reconfigure_applies_good_values_and_refuses_bad_ones(self):
         client = dynamic_reconfigure.client.Client(NODE, timeout=10)

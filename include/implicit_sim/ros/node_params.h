@@ -58,6 +58,9 @@ struct NodeParams {
   // Whether /tf carries the links that hang on joints (world -> link, like every other body). Set false to leave them
   // to robot_state_publisher fed by /joint_states (it publishes parent -> child along the URDF tree).
   bool publish_joint_link_tf = true;
+  // /diagnostics is WARN while the real-time factor of the last second is below this fraction of ~real_time_factor,
+  // or a step has run longer than a second; [0, 1], 0: never (doc/ros_node.md, "Diagnostics").
+  double min_real_time_fraction = 0.5;
   // Joint drives of ~joint_command and ~joint_trajectory add the gravity feed-forward (JointDrive::gravity_compensation).
   bool drive_gravity_compensation = false;
   bool interactive_markers = true;  // an interactive marker per moving body (~drag) that pushes it with the mouse

@@ -91,8 +91,9 @@ class SimNode {
   CommandContext Context() const;
   void PhysicsLoop();
   // One step with the commanded wrenches; false if it was interrupted (interrupt_: a cancelled job, shutdown) and so
-  // not taken.
-  bool StepOnce(double rtf);
+  // not taken. rtf: the real-time factor of the last second; paced: the step keeps ~real_time_factor's pace (false for
+  // a job's step, which runs as fast as it can).
+  bool StepOnce(double rtf, bool paced);
   void ResetWorld();          // bodies back to the initial state, warm start and commands cleared
   void SaveSnapshot();        // the current state as the latest snapshot (NodePublisher::Store)
   void RefuseReplayStep(const std::string& refusal);
