@@ -261,6 +261,9 @@ class NodeWorld(unittest.TestCase):
         subs = [rospy.Subscriber(NODE + "/sensors/s_bumper", ContactSensor,
                                  lambda m: stamps["bumper"].append(m.header.stamp.to_sec())),
                 rospy.Subscriber(NODE + "/sensors/s_imu", Imu, lambda m: stamps["imu"].append(m.header.stamp.to_sec()))]
+        deadline = time.monotonic() + 10.0  # on a loaded machine a rospy subscription can take a second to connect
+        while time.monotonic() < deadline and not (stamps["bumper"] and stamps["imu"]):
+            time.sleep(0.05)
         time.sleep(2.0)
         for sub in subs:
             sub.unregister()
