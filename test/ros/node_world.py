@@ -291,6 +291,9 @@ class NodeWorld(unittest.TestCase):
         time.sleep(1.0)  # the command is in force, the arms settle
         stats = []
         sub = rospy.Subscriber(NODE + "/step_stats", StepStats, stats.append)
+        deadline = time.monotonic() + 10.0  # a rospy subscription can take a second to connect on a loaded machine
+        while time.monotonic() < deadline and not stats:
+            time.sleep(0.05)
         time.sleep(5.0)
         sub.unregister()
         simulated = stats[-1].header.stamp.to_sec() - stats[0].header.stamp.to_sec()
