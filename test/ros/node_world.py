@@ -261,10 +261,11 @@ class NodeWorld(unittest.TestCase):
         subs = [rospy.Subscriber(NODE + "/sensors/s_bumper", ContactSensor,
                                  lambda m: stamps["bumper"].append(m.header.stamp.to_sec())),
                 rospy.Subscriber(NODE + "/sensors/s_imu", Imu, lambda m: stamps["imu"].append(m.header.stamp.to_sec()))]
-        deadline = time.monotonic() + 10.0  # on a loaded machine a rospy subscription can take a second to connect
-        while time.monotonic() < deadline and not (stamps["bumper"] and stamps["imu"]):
+        # Collect until both have 10 messages: on a loaded machine a rospy subscription can take a second to connect
+        # and the node can fall behind real time, so a fixed wall-time window may see too few stamps.
+        deadline = time.monotonic() + 30.0
+        while time.monotonic() < deadline and min(len(stamps["bumper"]), len(stamps["imu"])) < 10:
             time.sleep(0.05)
-        time.sleep(2.0)
         for sub in subs:
             sub.unregister()
         for name, rate in (("bumper", 20.0), ("imu", 50.0)):
