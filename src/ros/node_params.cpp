@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <set>
+#include <sstream>
 #include <vector>
 #include <stdexcept>
 
@@ -45,7 +46,7 @@ void ReadOptionParams(const ros::NodeHandle& pnh, StepperOptions* options) {
 }
 
 // The node's own private parameters besides the options table's.
-const char* const kNodeParams[] = {"scene", "scenes_dir", "paused", "on_fault", "world_frame", "publish_joint_link_tf",
+const char* const kNodeParams[] = {"scene", "scenes_dir", "read_dirs", "paused", "on_fault", "world_frame", "publish_joint_link_tf",
                                    "drive_gravity_compensation", "min_real_time_fraction",
                                    "interactive_markers", "floating_root", "input_journal", "replay_journal"};
 
@@ -95,6 +96,14 @@ NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
   NodeParams p;
   p.scene = ReadParam<std::string>(pnh, "scene", "");
   p.scenes_dir = ReadParam<std::string>(pnh, "scenes_dir", IMPLICIT_SIM_SCENES_DIR);
+  std::istringstream read_dirs(ReadParam<std::string>(pnh, "read_dirs", ""));
+  for (std::string dir; std::getline(read_dirs, dir, ':');) {
+    if (dir.empty()) continue;
+    if (!std::filesystem::path(dir).is_absolute()) {
+      throw std::invalid_argument("parameter ~read_dirs: '" + dir + "' is not an absolute directory path");
+    }
+    p.read_dirs.push_back(dir);
+  }
   ReadOptionParams(pnh, &p.options);
   for (const LiveParamRange& range : LiveParamRanges()) {
     double& value = p.live.*range.field;

@@ -7,6 +7,7 @@
 #include <ros/console.h>
 #include <ros/package.h>
 
+#include "implicit_sim/core/base/file_sandbox.h"
 #include "implicit_sim/core/model/urdf_loader.h"
 
 namespace implicit_sim {
@@ -14,15 +15,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Whether `path` lies inside directory `dir` (both made canonical; a missing path never does).
-bool IsInside(const fs::path& path, const std::string& dir) {
-  std::error_code ec;
-  const fs::path canonical_dir = fs::canonical(dir, ec);
-  if (ec) return false;
-  const fs::path canonical = fs::canonical(path, ec);
-  if (ec) return false;
-  const std::string d = canonical_dir.string() + "/", p = canonical.string();
-  return p.compare(0, d.size(), d) == 0;
+// What the node reads files from on a request (doc/ros_node.md, "Security"): ~scenes_dir, the package's scenes/,
+// ~read_dirs, ROS packages and, for meshes, the directory of the scene being loaded.
+FileSandbox NodeSandbox(const NodeParams& params, const std::string& scene_dir) {
+  FileSandbox sandbox;
+  sandbox.roots = {params.scenes_dir, IMPLICIT_SIM_SCENES_DIR};
+  sandbox.roots.insert(sandbox.roots.end(), params.read_dirs.begin(), params.read_dirs.end());
+  if (!scene_dir.empty()) sandbox.roots.push_back(scene_dir);
+  sandbox.package_files = true;
+  return sandbox;
 }
 
 }  // namespace
@@ -53,6 +54,7 @@ LoaderOptions SceneLoaderOptions(const NodeParams& params, const std::string& me
   options.floating_root = params.floating_root;
   options.resolve_package_uri = ResolvePackageUri;
   options.mesh_directory = mesh_directory;
+  options.mesh_sandbox = NodeSandbox(params, mesh_directory);
   options.warnings = warnings;
   // One cache for the node's life: a world edit re-loads the scene, but hulls each mesh (and notes it) only once.
   static const std::shared_ptr<MeshHullCache> hull_cache = std::make_shared<MeshHullCache>();
@@ -128,25 +130,34 @@ bool ReadRequestedScene(const NodeParams& params, const std::string& urdf, const
     *error = "give the scene as urdf (its text) or file";
     return false;
   }
-  fs::path path;
-  if (file.compare(0, 10, "package://") == 0) {
-    path = ResolvePackageUri(file);
-    if (path.empty()) {
+  const FileSandbox sandbox = NodeSandbox(params, "");
+  std::string path;  // canonical, inside the sandbox; "" when refused
+  if (file.compare(0, 10, "package://") == 0) {  // a package URI stays inside its package
+    const std::string package_dir = ResolvePackageUri(file.substr(0, file.find('/', 10)));
+    if (package_dir.empty()) {
       *error = "file '" + file + "': no such package";
       return false;
     }
-  } else if (file.find('/') == std::string::npos && fs::path(file).extension() != ".urdf") {
-    path = fs::path(params.scenes_dir) / (file + ".urdf");  // a scene name
-  } else {
-    path = file;
-    if (!IsInside(path, params.scenes_dir) && !IsInside(path, IMPLICIT_SIM_SCENES_DIR)) {
-      *error = "file '" + file + "' is not a file under ~scenes_dir (" + params.scenes_dir +
-               ") or the package's scenes/: the node reads scene files there and from package:// URIs only";
-      return false;
+    FileSandbox in_package;
+    in_package.roots = {package_dir};
+    path = in_package.Allowed(ResolvePackageUri(file));
+  } else if (fs::path(file).is_absolute()) {
+    path = sandbox.Allowed(file);
+  } else {  // a name or a relative path: in ~scenes_dir, then the package's scenes/; ".urdf" added when it has none
+    const bool has_extension = fs::path(file).extension() == ".urdf";
+    for (const std::string& dir : {params.scenes_dir, std::string(IMPLICIT_SIM_SCENES_DIR)}) {
+      if (path.empty() && !has_extension) path = sandbox.Allowed((fs::path(dir) / (file + ".urdf")).string());
+      if (path.empty()) path = sandbox.Allowed((fs::path(dir) / file).string());
     }
   }
+  if (path.empty()) {  // one message for every refusal: it must not tell whether a path exists
+    *error = "file '" + file + "': no readable scene file there inside what the node may read (" + sandbox.Describe() +
+             "; a name or relative path is looked up in ~scenes_dir, then the package's scenes/; a package:// URI "
+             "must stay inside its package)";
+    return false;
+  }
   try {
-    *out = SceneText{ReadSceneFile(path.string()), path.stem().string(), path.parent_path().string()};
+    *out = SceneText{ReadSceneFile(path), fs::path(path).stem().string(), fs::path(path).parent_path().string()};
   } catch (const std::exception& e) {
     *error = e.what();
     return false;

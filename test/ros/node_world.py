@@ -39,6 +39,12 @@ from visualization_msgs.msg import MarkerArray
 
 NODE = "/implicit_sim"
 SOURCE_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+MESH_DIR = "/tmp/node_world_test_meshes"  # ~read_dirs in node_world.test
+# A one-link robot whose collision mesh is {uri}.
+MESH_URDF = """<robot name="meshy"><link name="world"/><link name="part"><inertial><mass value="1"/>
+  <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+  <collision><geometry><mesh filename="{uri}"/></geometry></collision></link>
+  <joint name="part_joint" type="floating"><parent link="world"/><child link="part"/></joint></robot>"""
 
 
 def call(name, srv_type, *args, **fields):
@@ -136,16 +142,26 @@ class NodeWorld(unittest.TestCase):
         bad = call("load_scene", LoadScene, urdf="<robot name='x'><link name='world'/></robot>")
         self.assertFalse(bad.success)
         self.assertTrue(bad.message)
-        outside = call("load_scene", LoadScene, file="/etc/passwd")
-        self.assertFalse(outside.success)
-        self.assertIn("not a file under", outside.message)
-        self.assertNotIn("root:", outside.message)
+        # The path policy (doc/ros_node.md, "Security"): one message for every refusal, whether the file exists or not.
+        for field in ("/etc/passwd", "package://implicit_sim/../../../../../../../../etc/passwd"):
+            outside = call("load_scene", LoadScene, file=field)
+            missing = call("load_scene", LoadScene, file=field.replace("passwd", "no_such_file"))
+            self.assertFalse(outside.success or missing.success, field)
+            self.assertIn("no readable scene file there", outside.message)
+            self.assertNotIn("root:", outside.message)
+            self.assertEqual(outside.message.replace("passwd", "no_such_file"), missing.message)
+        for uri in ("/etc/passwd", "file:///proc/self/environ", "package://implicit_sim/../../../../../../../etc/passwd"):
+            mesh = call("spawn", Spawn, urdf=MESH_URDF.format(uri=uri), prefix="m_", pose=pose(4.0, 4.0, 0.5))
+            self.assertFalse(mesh.success, uri)
+            self.assertIn("no readable mesh file there", mesh.message)
+            self.assertNotIn("root:", mesh.message)
         time.sleep(0.3)
         self.assertNotEqual(call("get_body_state", GetBodyState, "cube").message, t0)  # time moved on
         self.assertIn("a_ball1", body_names())
 
     def test_4_a_robot_urdf_loads_with_its_root_welded_and_a_mesh_hull(self):
-        with tempfile.TemporaryDirectory() as directory:
+        os.makedirs(MESH_DIR, exist_ok=True)  # the test launch's ~read_dirs: the node reads meshes there
+        with tempfile.TemporaryDirectory(dir=MESH_DIR) as directory:
             mesh = os.path.join(directory, "link.stl")
             write_box_stl(mesh, 0.05)
             robot = f"""<?xml version="1.0"?>

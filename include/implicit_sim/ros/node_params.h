@@ -50,6 +50,9 @@ struct NodeParams {
   // Scene file path, or a name resolved as <scenes_dir>/<name>.urdf; "" -> the robot_description parameter.
   std::string scene;
   std::string scenes_dir;         // where scene names are looked up
+  // ~read_dirs (a ':'-separated list): directories whose scene and mesh files the services may read besides
+  // ~scenes_dir, the package's scenes/ and ROS packages (doc/ros_node.md, "Security").
+  std::vector<std::string> read_dirs;
   StepperOptions options;         // ~time_step (h), ~scheme, ~tolerance, ~max_iterations, ~solver, ~threads
   LiveParams live;
   bool paused = false;

@@ -64,9 +64,10 @@ struct World {
 // A 'package://pkg/path' URI as a file path through rospack; "" when the package is unknown or it is no such URI.
 std::string ResolvePackageUri(const std::string& uri);
 
-// The scene a request names: its text (urdf), or a file: a scene name in ~scenes_dir, a path under ~scenes_dir or the
-// package's scenes/, or a package:// URI. False with *error otherwise (both or neither given, a path elsewhere, an
-// unreadable file).
+// The scene a request names: its text (urdf), or a file: a name or relative path looked up in ~scenes_dir, then the
+// package's scenes/ (".urdf" added when missing), an absolute path, or a package:// URI, each read only inside the
+// node's sandbox (doc/ros_node.md, "Security"; one message for every refusal). False with *error otherwise (both or
+// neither given, a path outside, a missing or unreadable file, an unknown package).
 bool ReadRequestedScene(const NodeParams& params, const std::string& urdf, const std::string& file, SceneText* out,
                         std::string* error);
 

@@ -12,6 +12,7 @@
 #include <assimp/commonMetaData.h>
 #include <assimp/scene.h>
 
+#include "implicit_sim/core/base/file_sandbox.h"
 #include "geometry/convex_hull.h"
 #include "loader_util.h"
 
@@ -115,7 +116,25 @@ std::string ResolveMeshUri(const std::string& uri, const LoaderOptions& options)
     path = (fs::path(options.mesh_directory) / uri).string();
   }
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) Fail("mesh file '" + path + "' (from '" + uri + "') does not exist");
+  if (!options.mesh_sandbox.Unrestricted()) {
+    FileSandbox sandbox = options.mesh_sandbox;
+    if (StartsWith(uri, "package://")) {  // a package URI stays inside its package
+      sandbox = FileSandbox();
+      sandbox.roots = {ResolvePackageUri(uri.substr(0, uri.find('/', std::string("package://").size())), options)};
+    }
+    path = sandbox.Allowed(path);
+    if (path.empty()) {
+      Fail("mesh URI '" + uri + "': no readable mesh file there inside what meshes may be read from (" +
+           options.mesh_sandbox.Describe() + "; a package:// URI must stay inside its package)");
+    }
+  } else if (!fs::is_regular_file(path, ec)) {
+    Fail("mesh file '" + path + "' (from '" + uri + "') does not exist");
+  }
+  const uintmax_t bytes = fs::file_size(path, ec);
+  if (!ec && bytes > options.max_mesh_bytes) {
+    Fail("mesh file '" + path + "' (from '" + uri + "') has " + std::to_string(bytes) + " bytes, over the limit of " +
+         std::to_string(options.max_mesh_bytes) + " (LoaderOptions::max_mesh_bytes)");
+  }
   return path;
 }
 

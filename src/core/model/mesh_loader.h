@@ -14,7 +14,9 @@ namespace loader {
 // The file a mesh URI names: 'package://pkg/path' through options.resolve_package_uri, then a directory 'pkg' in (or
 // up to two levels below) a directory of the ROS_PACKAGE_PATH environment variable; 'file:///abs/path'; an absolute
 // path; a relative path against options.mesh_directory (the working directory when that is empty). Throws
-// std::invalid_argument (naming the URI) when a package is not found or the file does not exist.
+// std::invalid_argument (naming the URI) when a package is not found, the file does not exist, lies outside
+// options.mesh_roots (when set; one message for every such refusal) or is larger than options.max_mesh_bytes. Returns
+// the canonical path when mesh_roots are set.
 std::string ResolveMeshUri(const std::string& uri, const LoaderOptions& options);
 
 // Every vertex of every mesh in the file (m, in the file's frame, node transforms applied). STL (binary and ASCII) and

@@ -524,6 +524,45 @@ TEST_F(RobotUrdf, AMeshAboveTheFaceCapIsSimplifiedAndTheWarningSaysSo) {
   }
 }
 
+TEST_F(RobotUrdf, AMeshOverTheSizeCapIsRefusedBeforeItIsRead) {
+  LoaderOptions options;
+  options.max_mesh_bytes = fs::file_size(dir_ + "/octahedron.obj") - 1;
+  try {
+    Load(Robot("octahedron.obj"), options);
+    ADD_FAILURE() << "loaded";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("over the limit of " + std::to_string(options.max_mesh_bytes)),
+              std::string::npos) << e.what();
+  }
+  options.max_mesh_bytes += 1;
+  EXPECT_NO_THROW(Load(Robot("octahedron.obj"), options));
+}
+
+TEST_F(RobotUrdf, ASandboxedLoaderReadsMeshesInItsRootsAndPackagesOnly) {
+  LoaderOptions options;
+  options.mesh_sandbox.roots = {dir_ + "/share/test_robot_meshes"};
+  options.mesh_sandbox.package_files = true;
+  EXPECT_NO_THROW(Load(Robot("share/test_robot_meshes/meshes/box.stl"), options));  // in a root
+  EXPECT_NO_THROW(Load(Robot("package://nested_meshes/octahedron.obj"), options));  // in a package
+  const auto refusal = [&](const std::string& uri) {
+    try {
+      Load(Robot(uri), options);
+    } catch (const std::invalid_argument& e) {
+      std::string message = e.what();
+      for (size_t at = message.find(uri); at != std::string::npos; at = message.find(uri)) message.erase(at, uri.size());
+      return message;
+    }
+    return std::string("(loaded)");
+  };
+  const std::string missing = refusal("no_such_mesh.stl");
+  EXPECT_NE(missing.find("no readable mesh file there"), std::string::npos) << missing;
+  EXPECT_EQ(refusal("octahedron.obj"), missing);  // exists, outside the roots and any package
+  EXPECT_EQ(refusal("package://nested_meshes/../../../octahedron.obj"), missing);  // out of its package
+  options.mesh_sandbox = FileSandbox();  // unrestricted (the default): both load
+  EXPECT_NO_THROW(Load(Robot("octahedron.obj"), options));
+  EXPECT_NO_THROW(Load(Robot("package://nested_meshes/../../../octahedron.obj"), options));
+}
+
 TEST_F(RobotUrdf, BadMeshesNameTheLinkAndTheFile) {
   const std::string missing = LoadError(Robot("no_such_mesh.stl"));
   EXPECT_NE(missing.find("link 'arm'"), std::string::npos) << missing;

@@ -12,12 +12,14 @@
 // doc/scenes.md documents every element and attribute with units and allowed ranges.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "implicit_sim/core/base/file_sandbox.h"
 #include "implicit_sim/core/model/mesh_hull_cache.h"
 #include "implicit_sim/core/model/model.h"
 
@@ -31,6 +33,11 @@ struct LoaderOptions {
   // Resolves a 'package://pkg/path' mesh URI to a file path ("" when it cannot); tried before ROS_PACKAGE_PATH. The
   // ROS layer sets it; the core never includes ROS headers.
   std::function<std::string(const std::string& uri)> resolve_package_uri;
+  // Where mesh files may be read from (core/base/file_sandbox.h; default: anywhere). When restricted, a package:// URI
+  // must also stay inside its package, and every refusal has the same message. The node sets it.
+  FileSandbox mesh_sandbox;
+  // A mesh file larger than this is refused before it is read (bytes, > 0).
+  uint64_t max_mesh_bytes = uint64_t{64} << 20;
   // Directory of relative mesh paths. Empty: the URDF file's directory (LoadSceneFromFile) or the working directory
   // (LoadSceneFromString).
   std::string mesh_directory;
