@@ -30,12 +30,13 @@ int main(int argc, char** argv) {
   const std::string& shape = values["--shape"];
   char* end = nullptr;
   const long n = std::strtol(values["--n"].c_str(), &end, 10);
-  const bool n_ok = *end == '\0' && n >= 1 && n <= 100000;
+  const bool n_ok = *end == '\0' && n >= 1;
   const long seed = values.count("--seed") ? std::strtol(values["--seed"].c_str(), &end, 10) : 42;
   implicit_sim::PileShape pile_shape;
-  if (!n_ok || !implicit_sim::ParsePileShape(shape, &pile_shape) || *end != '\0' || seed < 0) {
-    std::cerr << "implicit_sim_make_pile: --n must be in [1, 100000], --shape sphere, ellipsoid, bracket or tee, "
-                 "--seed >= 0\n";
+  if (!n_ok || !implicit_sim::ParsePileShape(shape, &pile_shape) || *end != '\0' || seed < 0 ||
+      n > implicit_sim::MaxPileSize(pile_shape)) {
+    std::cerr << "implicit_sim_make_pile: --n must be in [1, 4000] (sphere, ellipsoid) or [1, 2000] (bracket, tee), "
+                 "--shape sphere, ellipsoid, bracket or tee, --seed >= 0\n";
     return 2;
   }
   const std::string orientation = values.count("--orientation") ? values["--orientation"] : "aligned";

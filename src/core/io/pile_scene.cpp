@@ -204,9 +204,17 @@ int SeparateRows(std::vector<Pose>* X_WB, double length) {
   return moved;
 }
 
+int MaxPileSize(PileShape shape) {
+  return shape == PileShape::kSphere || shape == PileShape::kEllipsoid ? 4000 : 2000;
+}
+
 std::string MakePileUrdf(int n, PileShape shape, unsigned seed, bool separate_overlaps, PileOrientation orientation,
                          double e_roll) {
-  if (n < 1 || n > 100000) throw std::invalid_argument("pile size n must be in [1, 100000], got " + std::to_string(n));
+  if (n < 1 || n > MaxPileSize(shape)) {
+    throw std::invalid_argument("pile size n must be in [1, " + std::to_string(MaxPileSize(shape)) + "] for " +
+                                PileShapeName(shape) + " parts (every pair of shapes is stored: " +
+                                "Model::kMaxContactPairs), got " + std::to_string(n));
+  }
   if (!(e_roll >= 0.0 && e_roll <= 1000.0)) {
     throw std::invalid_argument("pile e_roll must be in [0, 1000] m, got " + FormatNumber(e_roll));
   }

@@ -83,6 +83,26 @@ double Model::BodyReach(int body) const {
   return reach;
 }
 
+int64_t Model::ContactPairBound() const {
+  // Shapes with inequalities (others never touch), per body.
+  const auto shapes_of = [this](int b) {
+    int64_t count = 0;
+    for (const ConvexShape& shape : bodies[b].shapes) count += shape.inequalities.empty() ? 0 : 1;
+    return count;
+  };
+  int64_t moving = 0, fixed = 0, within_moving_bodies = 0;
+  for (int b = 0; b < static_cast<int>(bodies.size()); ++b) {
+    const int64_t k = shapes_of(b);
+    (bodies[b].is_fixed ? fixed : moving) += k;
+    if (!bodies[b].is_fixed) within_moving_bodies += k * (k - 1) / 2;
+  }
+  int64_t bound = moving * (moving - 1) / 2 - within_moving_bodies + moving * fixed;
+  for (const auto& [i, j] : excluded_pairs) {
+    if (!(bodies[i].is_fixed && bodies[j].is_fixed)) bound -= shapes_of(i) * shapes_of(j);
+  }
+  return bound;
+}
+
 double Model::ForceScale() const {
   double scale = 1e-3;
   for (int b : moving_bodies) {

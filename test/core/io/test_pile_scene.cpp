@@ -177,6 +177,27 @@ TEST(PileScene, BracketsAndTeesAreTwoShapeBodiesThatStartApart) {
 
 // Rolling resistance on the pile's friction (the batch studies' e_roll): every pair gets it, the layout stays the same,
 // and a value out of range is refused naming the range.
+// The documented pile sizes (launch/pile.launch, implicit_sim_make_pile --n) stay within the model's pair limit: n parts
+// of k shapes over 5 half-spaces form k^2 n (n - 1) / 2 + 5 k n pairs at most.
+TEST(PileScene, TheLargestPilesStayWithinThePairLimitAndLargerOnesAreRefused) {
+  for (const PileShape shape : {PileShape::kSphere, PileShape::kEllipsoid, PileShape::kBracket, PileShape::kTee}) {
+    const int64_t n = MaxPileSize(shape), k = shape == PileShape::kSphere || shape == PileShape::kEllipsoid ? 1 : 2;
+    EXPECT_LE(k * k * n * (n - 1) / 2 + 5 * k * n, Model::kMaxContactPairs) << PileShapeName(shape);
+    EXPECT_NO_THROW(MakePileUrdf(static_cast<int>(n), shape)) << PileShapeName(shape);
+    try {
+      MakePileUrdf(static_cast<int>(n) + 1, shape);
+      ADD_FAILURE() << PileShapeName(shape) << ": " << n + 1 << " accepted";
+    } catch (const std::invalid_argument& error) {
+      EXPECT_NE(std::string(error.what()).find("must be in [1, " + std::to_string(n) + "]"), std::string::npos)
+          << error.what();
+    }
+  }
+  // The bound is exact where no joint or exclusion removes a pair: a bracket pile's 2-shape parts.
+  const Model brackets = LoadSceneFromString(MakePileUrdf(6, PileShape::kBracket), "brackets");
+  EXPECT_EQ(static_cast<int64_t>(brackets.pairs.size()), brackets.ContactPairBound());
+  EXPECT_EQ(brackets.ContactPairBound(), 4 * 6 * 5 / 2 + 5 * 2 * 6);
+}
+
 TEST(PileScene, RollingResistanceReachesEveryPairAndBadValuesAreRefused) {
   const Model without = LoadSceneFromString(MakePileUrdf(5, PileShape::kEllipsoid, 3, true, PileOrientation::kRandom), "a");
   const Model with =

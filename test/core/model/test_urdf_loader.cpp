@@ -158,5 +158,26 @@ TEST(UrdfLoader, AChainOfTwentyThousandLinksLoads) {
   EXPECT_NEAR(model.frames.back().X_LF.translation().z(), (kLinks - 1) * 1e-4, 1e-9);
 }
 
+// The audit's 10^5 free spheres stored every pair (18 GB and rising); a scene past Model::kMaxContactPairs is refused
+// before its pairs are formed, with the counts and the limit. 6000 spheres can form 17 997 000 pairs.
+TEST(UrdfLoader, AScenePastThePairLimitIsRefusedBeforeItsPairsAreFormed) {
+  std::string urdf = "<robot name='many'><link name='world'/>";
+  for (int i = 0; i < 6000; ++i) {
+    const std::string link = "s" + std::to_string(i);
+    urdf += "<link name='" + link + "'><inertial><mass value='1'/><inertia ixx='1e-3' iyy='1e-3' izz='1e-3' ixy='0' "
+            "ixz='0' iyz='0'/></inertial><collision><geometry><sphere radius='0.01'/></geometry></collision></link>"
+            "<joint name='j" + link + "' type='floating'><parent link='world'/><child link='" + link + "'/><origin xyz='" +
+            std::to_string(0.05 * (i % 100)) + " " + std::to_string(0.05 * (i / 100)) + " 1'/></joint>";
+  }
+  urdf += "</robot>";
+  try {
+    LoadSceneFromString(urdf, "many");
+    ADD_FAILURE() << "loaded";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("6000 shapes can form 17997000 contact pairs, over the limit of 8388608"),
+              std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace implicit_sim

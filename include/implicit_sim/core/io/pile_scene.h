@@ -53,8 +53,12 @@ std::vector<Pose> RandomPileLayout(int n, unsigned seed);
 // least-squares change of the x-centres; returns how many bodies moved.
 int SeparateRows(std::vector<Pose>* X_WB, double length);
 
+// The largest pile of `shape` a model holds (Model::kMaxContactPairs): 4000 sphere or ellipsoid parts, 2000 bracket
+// or tee parts (two shapes each).
+int MaxPileSize(PileShape shape);
+
 // The scene as URDF text (links "floor", "wall_px", "wall_nx", "wall_py", "wall_ny", "body_<i>"), with rolling
-// resistance e_roll (m) on its friction when > 0. Throws std::invalid_argument for n outside [1, 100000] or e_roll
+// resistance e_roll (m) on its friction when > 0. Throws std::invalid_argument for n outside [1, MaxPileSize] or e_roll
 // outside [0, 1000]. With PileOrientation::kRandom the layout is RandomPileLayout and separate_overlaps has no effect
 // (nothing overlaps).
 std::string MakePileUrdf(int n, PileShape shape, unsigned seed = 42, bool separate_overlaps = true,

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -168,6 +170,12 @@ struct Model {
   // already be filled in.
   template <typename FrictionOf>
   void Finalize(FrictionOf pair_friction);
+  // The most contact pairs Finalize can form from the bodies' shapes (every two shapes of two bodies of which one moves,
+  // less the excluded body pairs), counted without forming them.
+  int64_t ContactPairBound() const;
+  // Finalize refuses a scene whose bound exceeds this (std::invalid_argument, before allocating): every pair is stored,
+  // about 80 bytes in the model and the step's workspace, so 2^23 pairs take about 650 MB (a pile of 4000 parts).
+  static constexpr int64_t kMaxContactPairs = int64_t{1} << 23;
   // A force scale (N) for the solver's row scaling: over the moving bodies, the largest of |m g + f_applied| and
   // m max(|g|, 1 m/s^2); at least 1e-3 N.
   double ForceScale() const;
@@ -190,6 +198,14 @@ void Model::Finalize(FrictionOf pair_friction) {
   geoms.clear();
   for (int b = 0; b < static_cast<int>(bodies.size()); ++b) {
     for (int k = 0; k < static_cast<int>(bodies[b].shapes.size()); ++k) geoms.push_back(Geom{b, k});
+  }
+  const int64_t bound = ContactPairBound();
+  if (bound > kMaxContactPairs) {
+    throw std::invalid_argument("scene: " + std::to_string(bodies.size()) + " bodies with " +
+                                std::to_string(geoms.size()) + " shapes can form " + std::to_string(bound) +
+                                " contact pairs, over the limit of " + std::to_string(kMaxContactPairs) +
+                                " (Model::kMaxContactPairs; every pair is stored, about 80 bytes each): fewer moving "
+                                "bodies, or fewer shapes on them");
   }
   pairs.clear();
   pairs_of_lower.assign(geoms.size() + 1, 0);
