@@ -9,8 +9,20 @@ bool PhysicsMailbox::RunBetweenSteps(std::function<void()> fn) {
   if (stopping_) return false;
   commands_.push_back(command);
   cv_.notify_all();
-  cv_.wait(lock, [&] { return command->done || stopping_; });
+  const auto done_or_stopping = [&] { return command->done || stopping_; };
+  if (cut_step_ && !cv_.wait_for(lock, cut_after_, done_or_stopping)) {
+    lock.unlock();
+    cut_step_();
+    lock.lock();
+  }
+  cv_.wait(lock, done_or_stopping);
   return command->done;
+}
+
+void PhysicsMailbox::SetStepCutter(std::chrono::milliseconds after, std::function<void()> cut_step) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  cut_after_ = after;
+  cut_step_ = std::move(cut_step);
 }
 
 void PhysicsMailbox::Post(std::function<void()> fn) {

@@ -66,6 +66,7 @@ void SimNode::Run() {
   ros::AsyncSpinner spinner(4);  // services wait for the physics thread: several may wait at once
   spinner.start();
   publisher_->PublishClock(SimTime());
+  mailbox_.SetStepCutter(kCutStepAfter, [this] { CutStepForCommand(); });
   StartThread(&physics_thread_, &SimNode::PhysicsLoop);
   StartThread(&publish_thread_, &SimNode::PublishLoop);
   StartThread(&diagnostics_thread_, &SimNode::DiagnosticsLoop);
@@ -121,6 +122,13 @@ CommandContext SimNode::Context() const {
   return CommandContext{SimTime(), live_->Live(), params_.world_frame, params_.drive_gravity_compensation};
 }
 
+void SimNode::CutStepForCommand() {
+  std::lock_guard<std::mutex> lock(cut_mutex_);
+  if (!step_running_ || !step_cuttable_ || step_cut_) return;
+  step_cut_ = true;
+  interrupt_.Request();  // the step stops between two factorizations and is undone
+}
+
 bool SimNode::StepOnce(double rtf, bool paced) {
   live_->CopySolverOptions(&options_);
   std::string replay_refusal;
@@ -137,6 +145,11 @@ bool SimNode::StepOnce(double rtf, bool paced) {
   w.data->interrupt = &interrupt_;
   state_before_ = w.state;
   diagnostics_->BeginStep();
+  {
+    std::lock_guard<std::mutex> lock(cut_mutex_);
+    step_running_ = true;
+    step_cuttable_ = !redoing_cut_step_;
+  }
   try {
     report = Step(*w.model, options_, &w.state, w.data.get(), &w.wrench_W);
   } catch (const std::exception& e) {
@@ -144,10 +157,21 @@ bool SimNode::StepOnce(double rtf, bool paced) {
     report.fault = StepFault::kNoFiniteSolution;
     report.fault_detail = e.what();
   }
-  if (report.fault == StepFault::kInterrupted) {  // undone: no step, no fault (a cancelled job, or shutdown)
+  bool cut = false;
+  {
+    std::lock_guard<std::mutex> lock(cut_mutex_);
+    step_running_ = false;
+    cut = step_cut_;
+    step_cut_ = false;
+    // A cut requested after the step's last check: the request must not stop the next step.
+    if (cut && report.fault != StepFault::kInterrupted && !stopping_) interrupt_.Clear();
+  }
+  if (report.fault == StepFault::kInterrupted) {  // undone: no step, no fault (a command, a cancelled job, shutdown)
     if (!stopping_) interrupt_.Clear();
+    redoing_cut_step_ = cut;
     return false;
   }
+  redoing_cut_step_ = false;
   ++step_count_;
   std::string failure;
   if (report.advanced) {

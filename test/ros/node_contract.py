@@ -32,7 +32,7 @@ from xml.etree import ElementTree
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Point, Pose, Vector3, Wrench
 from implicit_sim.msg import BodyStates, RunStepsAction, RunStepsGoal
-from implicit_sim.srv import ApplyBodyWrench, Delete, GetBodyState, Spawn
+from implicit_sim.srv import ApplyBodyWrench, Delete, GetBodyState, Spawn, Step
 from rosgraph_msgs.msg import Clock
 from std_srvs.srv import Trigger
 from tf2_msgs.msg import TFMessage
@@ -373,6 +373,39 @@ class NodeContract(unittest.TestCase):
         print("[ INFO ] SIGINT during a 1e6-step goal: exit %d after %.3f s" % (code, stop_s), flush=True)
         self.assertEqual(code, 0)
         self.assertLess(stop_s, 2.0)
+
+    def test_6b_a_service_cuts_a_long_step_and_the_step_is_redone(self):
+        # Every Newton solve runs to its 3000 iterations (tolerance 1e-300), so one step of the P3 scene takes seconds.
+        # Its own topics are remapped: the contract's node keeps /clock, /tf and /diagnostics.
+        name = "/long_step_node"
+        node = subprocess.Popen(["rosrun", "implicit_sim", "implicit_sim_node", "__name:=" + name[1:],
+                                 "_scene:=p3_sphere_on_two_spheres", "_scenes_dir:=" + SOURCE_DIR + "/scenes",
+                                 "_tolerance:=1e-300", "_max_iterations:=3000", "_on_fault:=pause",
+                                 "clock:=/long_step_clock", "tf:=/long_step_tf", "tf_static:=/long_step_tf_static",
+                                 "diagnostics:=/long_step_diagnostics", "joint_states:=/long_step_joint_states"],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+        try:
+            rospy.wait_for_service(name + "/pause", timeout=15)
+            time.sleep(1.0)  # inside the first step
+            start = time.monotonic()
+            self.assertTrue(rospy.ServiceProxy(name + "/pause", Trigger)().success)
+            pause_s = time.monotonic() - start
+            state = rospy.ServiceProxy(name + "/get_body_state", GetBodyState)("ball")
+            # The same step run whole by ~step (a job's step is cut only by a service command, none comes).
+            start = time.monotonic()
+            rospy.ServiceProxy(name + "/step", Step)(1)
+            step_s = time.monotonic() - start
+        finally:
+            os.killpg(node.pid, signal.SIGINT)
+            try:
+                node.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                os.killpg(node.pid, signal.SIGKILL)
+        print("[ INFO ] ~pause during a long step: answered in %.3f s; the step alone takes %.2f s" % (pause_s, step_s),
+              flush=True)
+        self.assertEqual(state.message, "t = 0 s")  # the cut step was undone: no time passed
+        self.assertGreater(step_s, 3.0)  # so the pause 1 s after the start came during the first step
+        self.assertLess(pause_s, 0.5)
 
 
 if __name__ == "__main__":

@@ -3,6 +3,7 @@
 // releases every waiter, and a step job counts its steps. The "steps" here are gates the test opens, so every
 // assertion is about order, never about how long anything took.
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <mutex>
 #include <string>
@@ -76,6 +77,35 @@ TEST(PhysicsMailbox, ACommandQueuedDuringAStepRunsRightAfterIt) {
   EXPECT_EQ(done_when_run, 1);
   EXPECT_EQ(started_when_run, 1);
   EXPECT_EQ(mailbox.QueuedCommands(), 0u);
+}
+
+// The node's cutter interrupts the step in progress; here it ends the gated step, which the command then follows.
+TEST(PhysicsMailbox, ACommandThatWaitsCallsTheStepCutterOnce) {
+  PhysicsMailbox mailbox;
+  GatedPhysics physics(&mailbox);
+  std::atomic<int> cuts{0};
+  mailbox.SetStepCutter(std::chrono::milliseconds(1), [&] {
+    ++cuts;
+    physics.OpenSteps(1);
+  });
+  physics.WaitUntilStepRunning(1);
+  int done_when_run = -1;
+  EXPECT_TRUE(mailbox.RunBetweenSteps([&] { done_when_run = physics.done(); }));  // no one else opens the step
+  EXPECT_EQ(cuts.load(), 1);
+  EXPECT_EQ(done_when_run, 1);
+}
+
+TEST(PhysicsMailbox, ACommandServedInTimeDoesNotCallTheStepCutter) {
+  PhysicsMailbox mailbox;
+  GatedPhysics physics(&mailbox);
+  std::atomic<int> cuts{0};
+  mailbox.SetStepCutter(std::chrono::seconds(60), [&] { ++cuts; });
+  physics.WaitUntilStepRunning(1);
+  std::thread caller([&] { EXPECT_TRUE(mailbox.RunBetweenSteps([] {})); });
+  WaitUntilQueued(mailbox, 1);
+  physics.OpenSteps(1);
+  caller.join();
+  EXPECT_EQ(cuts.load(), 0);
 }
 
 TEST(PhysicsMailbox, CommandsFromSeveralThreadsRunOnceInQueueOrder) {

@@ -27,8 +27,12 @@ class PhysicsMailbox {
   // What the physics thread does next.
   enum class Work { kStop, kRun, kJobStep };
 
-  // Runs fn on the physics thread between two steps and waits for it; false (fn not run) once stopping.
+  // Runs fn on the physics thread between two steps and waits for it; false (fn not run) once stopping. After waiting
+  // the step cutter's time it calls the cutter once (a long step in progress is cut, so fn runs at once).
   bool RunBetweenSteps(std::function<void()> fn);
+  // What a command that has waited `after` for the step in progress calls (SimNode::CutStepForCommand). Set before
+  // the threads start; without one, commands wait for the step to end.
+  void SetStepCutter(std::chrono::milliseconds after, std::function<void()> cut_step);
   // Queues fn for the physics thread without waiting.
   void Post(std::function<void()> fn);
   // Ends every wait; later RunBetweenSteps calls refuse.
@@ -68,6 +72,8 @@ class PhysicsMailbox {
   std::vector<std::shared_ptr<Command>> commands_;
   StepJob job_;
   bool stopping_ = false;
+  std::chrono::milliseconds cut_after_{0};
+  std::function<void()> cut_step_;
 };
 
 }  // namespace implicit_sim

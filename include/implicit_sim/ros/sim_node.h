@@ -14,6 +14,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <memory>
+#include <chrono>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -162,8 +163,17 @@ class SimNode {
 
   // Every thread ends: the physics thread after the step in progress, the others at once.
   std::atomic<bool> stopping_{false};
-  // Stops the step in progress (Data::interrupt) when a ~run_steps job is cancelled and at shutdown.
+  // Stops the step in progress (Data::interrupt) when a ~run_steps job is cancelled, at shutdown, and when a service's
+  // command has waited kCutStepAfter for it (CutStepForCommand).
   StepInterrupt interrupt_;
+  // A service's command that has waited this long cuts the step in progress: the step is undone, the command runs and
+  // the step is redone from its start state, so results are as if the command had come before it. A redone step is
+  // not cut again (the simulation always advances); shutdown and a cancelled job still stop it.
+  static constexpr std::chrono::milliseconds kCutStepAfter{50};
+  void CutStepForCommand();  // any thread
+  std::mutex cut_mutex_;
+  bool step_running_ = false, step_cuttable_ = false, step_cut_ = false;  // guarded by cut_mutex_
+  bool redoing_cut_step_ = false;  // the physics thread's: the next step redoes a cut one
   std::mutex stop_mutex_;
   std::condition_variable stop_cv_;  // wakes the publish and diagnostics threads' waits, and StopThreads
   int threads_started_ = 0, threads_ended_ = 0;  // guarded by stop_mutex_
