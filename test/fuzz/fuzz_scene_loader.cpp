@@ -1,6 +1,7 @@
 // A seeded random-mutation fuzzer for the scene loader (g++ has no libFuzzer). It mutates a corpus of URDF scenes
 // (byte flips, inserts, deletes, splices between inputs, numbers replaced by nan/inf/-1/1e308/0/huge integers,
-// XML elements and attributes duplicated or deleted) and loads each input with LoadSceneFromString.
+// XML elements and attributes duplicated or deleted, hostile mesh URIs inserted, chains of up to 500 links and up
+// to 150 free bodies appended) and loads each input with LoadSceneFromString, meshes sandboxed as in the node.
 //   std::invalid_argument        the expected refusal of a bad scene;
 //   a returned Model             accepted;
 //   any other exception          a failure;
@@ -57,6 +58,17 @@
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// Loads as the node's services do, with mesh files read only inside a sandbox: here one root that does not exist, so
+// every mesh URI an input names must be refused (std::invalid_argument) without a file being opened.
+const implicit_sim::LoaderOptions& SandboxedLoader() {
+  static const implicit_sim::LoaderOptions options = [] {
+    implicit_sim::LoaderOptions o;
+    o.mesh_sandbox.roots = {"/nonexistent/implicit_sim_fuzz_meshes"};
+    return o;
+  }();
+  return options;
+}
 
 struct Options {
   uint64_t seed = 1;
@@ -173,7 +185,7 @@ class Mutator {
   std::string Mutate(std::string s) {
     const int count = 1 + static_cast<int>(Below(Chance(0.2) ? 8 : 3));
     for (int k = 0; k < count; ++k) {
-      switch (Below(12)) {
+      switch (Below(13)) {
         case 0: FlipBit(&s); break;
         case 1: InsertBytes(&s); break;
         case 2: DeleteRange(&s); break;
@@ -185,6 +197,7 @@ class Mutator {
         case 8: DuplicateOrDeleteAttribute(&s); break;
         case 9: ReplaceAttributeValue(&s); break;
         case 10: InsertToken(&s); break;
+        case 11: AppendChainOrBodies(&s); break;
         default: DuplicateRange(&s); break;
       }
     }
@@ -376,13 +389,45 @@ class Mutator {
     s->replace(quote + 1, pos + len - 1 - (quote + 1), value);
   }
 
+  // Structure the byte mutations rarely build (issue 35's cases): a chain of up to 500 links on joints of every
+  // kind, or up to 150 free bodies, appended before </robot> (the loader refuses them where 'world' is missing).
+  void AppendChainOrBodies(std::string* s) {
+    const size_t end = s->rfind("</robot>");
+    if (end == std::string::npos) return;
+    static const char* const kJointTypes[] = {"fixed", "revolute", "continuous", "prismatic"};
+    const bool free_bodies = Chance(0.5);
+    const size_t count = 1 + Below(free_bodies ? 150 : 500);
+    std::string block;
+    for (size_t i = 0; i < count; ++i) {
+      const std::string link = "fz" + std::to_string(i);
+      const std::string parent = free_bodies || i == 0 ? "world" : "fz" + std::to_string(i - 1);
+      const std::string xyz = free_bodies ? std::to_string(0.1 * (i % 20)) + " " + std::to_string(0.1 * (i / 20)) + " 1"
+                                          : std::string("0 0 0.01");
+      block += "<link name=\"" + link + "\"><inertial><mass value=\"1\"/><inertia ixx=\"1e-3\" iyy=\"1e-3\" " +
+               "izz=\"1e-3\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial>" +
+               (Chance(0.5) ? "<collision><geometry><sphere radius=\"0.004\"/></geometry></collision>" : "") +
+               "</link><joint name=\"fzj" + std::to_string(i) + "\" type=\"" +
+               (free_bodies ? "floating" : kJointTypes[Below(4)]) + "\"><parent link=\"" + parent +
+               "\"/><child link=\"" + link + "\"/><origin xyz=\"" + xyz + "\"/><axis xyz=\"0 0 1\"/>" +
+               "<limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>";
+    }
+    s->insert(end, block);
+  }
+
   void InsertToken(std::string* s) {
     static const char* const kTokens[] = {
         "<link name=\"x\"/>", "<joint name=\"j\" type=\"floating\"><parent link=\"world\"/><child link=\"x\"/></joint>",
         "<collision><geometry><sphere radius=\"1\"/></geometry></collision>", "<implicit_sim/>", "<robot>",
         "</robot>", "<!--", "-->", "<![CDATA[", "]]>", "<?xml version=\"1.0\"?>", "&lt;", "&#65;", "\0",
         "<friction mu=\"0.5\"/>", "<body link=\"world\"/>", "<body link=\"nope\" locked=\"x\"/>", "<inertial/>",
-        "<origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>", "<mass value=\"0\"/>", "<implicit type=\"ngon\" n=\"1000000\"/>"};
+        "<origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>", "<mass value=\"0\"/>", "<implicit type=\"ngon\" n=\"1000000\"/>",
+        // Mesh URIs out of the sandbox the harness loads with (LoaderOptions::mesh_sandbox): each must be refused.
+        "<collision><geometry><mesh filename=\"/etc/passwd\"/></geometry></collision>",
+        "<collision><geometry><mesh filename=\"file:///proc/self/environ\"/></geometry></collision>",
+        "<collision><geometry><mesh filename=\"/dev/zero\"/></geometry></collision>",
+        "<collision><geometry><mesh filename=\"package://implicit_sim/../../../../../../etc/passwd\"/></geometry>"
+        "</collision>",
+        "<collision><geometry><mesh filename=\"../../../../../../etc/shadow\" scale=\"1 1 1\"/></geometry></collision>"};
     const size_t k = Below(sizeof(kTokens) / sizeof(kTokens[0]));
     const std::string token = kTokens[k][0] == '\0' ? std::string(1, '\0') : std::string(kTokens[k]);
     s->insert(Below(s->size() + 1), token);
@@ -516,7 +561,7 @@ int main(int argc, char** argv) {
     const auto start = Clock::now();
     std::string failure_kind, failure_what;
     try {
-      const implicit_sim::Model model = implicit_sim::LoadSceneFromString(input, "fuzz");
+      const implicit_sim::Model model = implicit_sim::LoadSceneFromString(input, "fuzz", SandboxedLoader());
       ++accepted;
       if (pool.size() < kPoolMax) {
         pool.push_back(input);
