@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   try {
     implicit_sim::SimNode node(ros::NodeHandle(), ros::NodeHandle("~"));
     node.Run();
+    if (node.exited_on_master_loss()) return 1;  // ~on_master_loss: exit (the ERROR names the master)
   } catch (const std::exception& e) {
     std::cerr << "implicit_sim_node: " << e.what() << std::endl;  // one line naming the parameter or link
     ROS_FATAL("implicit_sim_node: %s", e.what());                  // and on /rosout

@@ -46,7 +46,7 @@ void ReadOptionParams(const ros::NodeHandle& pnh, StepperOptions* options) {
 }
 
 // The node's own private parameters besides the options table's.
-const char* const kNodeParams[] = {"scene", "scenes_dir", "read_dirs", "paused", "on_fault", "world_frame", "publish_joint_link_tf",
+const char* const kNodeParams[] = {"scene", "scenes_dir", "read_dirs", "paused", "on_fault", "on_master_loss", "world_frame", "publish_joint_link_tf",
                                    "drive_gravity_compensation", "min_real_time_fraction",
                                    "interactive_markers", "floating_root", "input_journal", "replay_journal"};
 
@@ -117,6 +117,11 @@ NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
     throw std::invalid_argument("parameter ~on_fault = '" + on_fault + "' must be pause or reset");
   }
   p.on_fault = on_fault == "reset" ? OnFault::kReset : OnFault::kPause;
+  const std::string on_master_loss = ReadParam<std::string>(pnh, "on_master_loss", "reregister");
+  if (on_master_loss != "reregister" && on_master_loss != "exit") {
+    throw std::invalid_argument("parameter ~on_master_loss = '" + on_master_loss + "' must be reregister or exit");
+  }
+  p.exit_on_master_loss = on_master_loss == "exit";
   p.world_frame = ReadParam(pnh, "world_frame", p.world_frame);
   p.publish_joint_link_tf = ReadParam(pnh, "publish_joint_link_tf", p.publish_joint_link_tf);
   p.drive_gravity_compensation = ReadParam(pnh, "drive_gravity_compensation", p.drive_gravity_compensation);

@@ -67,6 +67,15 @@ void SimNode::Run() {
   spinner.start();
   publisher_->PublishClock(SimTime());
   mailbox_.SetStepCutter(kCutStepAfter, [this] { CutStepForCommand(); });
+  master_watch_ = std::make_unique<MasterWatch>(
+      params_.exit_on_master_loss ? MasterWatch::Policy::kExit : MasterWatch::Policy::kReregister, [this] {
+        std::vector<std::string> names;
+        for (const ros::ServiceServer& service : services_) names.push_back(service.getService());
+        for (const char* own : {"get_loggers", "set_logger_level", "set_parameters"}) {
+          names.push_back(ros::names::resolve("~" + std::string(own)));
+        }
+        return names;
+      });
   StartThread(&physics_thread_, &SimNode::PhysicsLoop);
   StartThread(&publish_thread_, &SimNode::PublishLoop);
   StartThread(&diagnostics_thread_, &SimNode::DiagnosticsLoop);
@@ -312,6 +321,7 @@ void SimNode::DiagnosticsLoop() {
   while (!stop_cv_.wait_for(lock, std::chrono::seconds(1), [this] { return stopping_.load(); })) {
     lock.unlock();
     diagnostics_->Publish();
+    master_watch_->Check();
     lock.lock();
   }
 }

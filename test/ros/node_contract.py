@@ -14,11 +14,13 @@ scenes/cube_drop.urdf, real time, publish_rate 30 Hz, no /use_sim_time so the ti
 import math
 import os
 import signal
+import socket
 import subprocess
 import tempfile
 import threading
 import time
 import unittest
+import xmlrpc.client
 
 import actionlib
 import dynamic_reconfigure.client
@@ -406,6 +408,71 @@ class NodeContract(unittest.TestCase):
         self.assertEqual(state.message, "t = 0 s")  # the cut step was undone: no time passed
         self.assertGreater(step_s, 3.0)  # so the pause 1 s after the start came during the first step
         self.assertLess(pause_s, 0.5)
+
+    def test_6c_after_a_master_restart_the_node_registers_again_or_exits(self):
+        # A master of its own on a free port, killed and started again; the node runs against it.
+        def free_port():
+            with socket.socket() as sock:
+                sock.bind(("127.0.0.1", 0))
+                return sock.getsockname()[1]
+
+        def start_master(port):
+            return subprocess.Popen(["rosmaster", "--core", "-p", str(port)], stdout=subprocess.DEVNULL,
+                                    stderr=subprocess.DEVNULL, start_new_session=True)
+
+        def lookup(uri, service):
+            try:
+                code, _, found = xmlrpc.client.ServerProxy(uri).lookupService("/test", service)
+                return found if code == 1 else ""
+            except OSError:
+                return ""
+
+        def stop(process):
+            if process.poll() is None:
+                os.killpg(process.pid, signal.SIGINT)
+                try:
+                    process.wait(timeout=20)
+                except subprocess.TimeoutExpired:
+                    os.killpg(process.pid, signal.SIGKILL)
+                    process.wait()
+
+        for policy in ("reregister", "exit"):
+            port = free_port()
+            uri = "http://127.0.0.1:%d/" % port
+            env = dict(os.environ, ROS_MASTER_URI=uri)
+            master = start_master(port)
+            node = subprocess.Popen(["rosrun", "implicit_sim", "implicit_sim_node", "__name:=master_loss_node",
+                                     "_scene:=p3_sphere_on_two_spheres", "_scenes_dir:=" + SOURCE_DIR + "/scenes",
+                                     "_on_master_loss:=" + policy], env=env, stdout=subprocess.DEVNULL,
+                                    stderr=subprocess.PIPE, start_new_session=True)
+            try:
+                deadline = time.monotonic() + 20
+                while time.monotonic() < deadline and not lookup(uri, "/master_loss_node/get_body_state"):
+                    time.sleep(0.1)
+                self.assertTrue(lookup(uri, "/master_loss_node/get_body_state"), policy)
+                time.sleep(1.0)  # running
+                stop(master)
+                time.sleep(2.0)  # the node's checks see no master
+                master = start_master(port)
+                deadline = time.monotonic() + 20
+                if policy == "reregister":
+                    while time.monotonic() < deadline and not lookup(uri, "/master_loss_node/get_body_state"):
+                        time.sleep(0.1)
+                    answer = subprocess.run(["rosservice", "call", "/master_loss_node/get_body_state", "ball"], env=env,
+                                            capture_output=True, text=True, timeout=20)
+                    self.assertIn("success: True", answer.stdout, answer.stderr)
+                    state = xmlrpc.client.ServerProxy(uri).getSystemState("/test")[2]
+                    publishers = {topic for topic, nodes in state[0] if "/master_loss_node" in nodes}
+                    self.assertIn("/master_loss_node/step_stats", publishers)
+                    self.assertIn("/clock", publishers)
+                    self.assertIsNone(node.poll())
+                else:
+                    code = node.wait(timeout=20)
+                    self.assertEqual(code, 1)
+                    self.assertIn("lost the ROS master", node.stderr.read().decode())
+            finally:
+                stop(node)
+                stop(master)
 
 
 if __name__ == "__main__":

@@ -57,6 +57,8 @@ struct NodeParams {
   LiveParams live;
   bool paused = false;
   OnFault on_fault = OnFault::kPause;  // ~on_fault: "pause" or "reset"
+  // ~on_master_loss: "reregister" (register again with a master that returns) or "exit" (status 1); master_watch.h.
+  bool exit_on_master_loss = false;
   std::string world_frame = "world";
   // Whether /tf carries the links that hang on joints (world -> link, like every other body). Set false to leave them
   // to robot_state_publisher fed by /joint_states (it publishes parent -> child along the URDF tree).

@@ -48,6 +48,7 @@
 #include "implicit_sim/ros/node_params.h"
 #include "implicit_sim/ros/node_publisher.h"
 #include "implicit_sim/ros/node_sensors.h"
+#include "implicit_sim/ros/master_watch.h"
 #include "implicit_sim/ros/physics_mailbox.h"
 #include "implicit_sim/ros/world.h"
 #include "implicit_sim/ros/world_commands.h"
@@ -69,6 +70,8 @@ class SimNode {
   ~SimNode();
   // Starts the physics, publishing and diagnostics threads and blocks until ROS shuts down.
   void Run();
+  // Whether the node shut down because it lost the ROS master (~on_master_loss: exit).
+  bool exited_on_master_loss() const { return master_watch_ && master_watch_->exit_requested(); }
 
  private:
   // A command topic: its name (for warnings), its journal kind, its /diagnostics counter, what applies a message to
@@ -179,6 +182,7 @@ class SimNode {
   int threads_started_ = 0, threads_ended_ = 0;  // guarded by stop_mutex_
 
   std::vector<ros::ServiceServer> services_;
+  std::unique_ptr<MasterWatch> master_watch_;  // checked by the diagnostics thread
   ros::Subscriber wrench_sub_, joint_effort_sub_, joint_command_sub_, joint_trajectory_sub_;
   std::unique_ptr<actionlib::SimpleActionServer<implicit_sim::RunStepsAction>> run_steps_server_;
   std::unique_ptr<actionlib::SimpleActionServer<implicit_sim::FollowTrajectoryAction>> follow_trajectory_server_;
