@@ -473,7 +473,7 @@ TEST(PileStudy, ThePileKeyParsesAndBadValuesAreRefusedNamingTheKey) {
     std::vector<std::string> words;
   };
   const std::vector<Case> cases = {
-      {"zero_n", "n: 50", "n: 0", {"pile.n", "[1, 100000]"}},
+      {"zero_n", "n: 50", "n: 0", {"pile.n", "[1, 4000]"}},
       {"fractional_n", "n: 50", "n: 2.5", {"pile.n", "integer"}},
       {"bad_shape", "shape: ellipsoid", "shape: cube", {"pile.shape", "sphere, ellipsoid"}},
       {"bad_orientation", "orientation: random", "orientation: tilted", {"pile.orientation", "random", "aligned"}},

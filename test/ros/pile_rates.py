@@ -95,9 +95,10 @@ class PileRates(unittest.TestCase):
         """With 100 bodies and steps of 0.1-1 s, ~get_body_state answers from the snapshot at once (the median of 5 calls
         on one connection under 0.2 s, every call under 1 s; CI runs this beside a sanitized build, so a single call
         may lose the CPU for a while), and a service that changes the world (~clear_body_wrenches) answers while the
-        physics runs: within 1 s of the second step completed after the call (new values on /clock). That it runs
-        right after the step in progress, never a step later, is checked without timing in test_physics_mailbox;
-        the slack here is for the sanitized build that CI runs beside this test."""
+        physics runs: within 1 s of the call (it cuts the step in progress, doc/ros_node.md#threads-and-rates), or,
+        when the step in progress is a redone one (never cut again), within 1 s of that step's end (new values on
+        /clock). That it runs right after the step in progress, never a step later, is checked without timing in
+        test_physics_mailbox; the slack here is for the sanitized build that CI runs beside this test."""
         time.sleep(3.0)  # steps are running
         rospy.wait_for_service("/implicit_sim/get_body_state", timeout=60)
         get = rospy.ServiceProxy("/implicit_sim/get_body_state", implicit_sim.srv.GetBodyState, persistent=True)
@@ -120,18 +121,18 @@ class PileRates(unittest.TestCase):
                 news.append(wall)
                 last = sim
         steps = [b - a for a, b in zip(news, news[1:])]
-        late = []  # (call s, s after the second step completed after the call)
+        late = []  # (call s, s after the first step completed after the call)
         for start, end in writes:
-            after = [n for n in news if n > start][:2]
-            if not after or end > after[-1] + 1.0:
-                late.append((round(end - start, 3), round(end - after[-1], 3) if after else None))
+            after = [n for n in news if n > start][:1]
+            if end - start > 1.0 and (not after or end > after[0] + 1.0):
+                late.append((round(end - start, 3), round(end - after[0], 3) if after else None))
         print("[ INFO ] pile N = %d: ~get_body_state %s s, ~clear_body_wrenches %s s, steps seen %.3f-%.3f s"
               % (rospy.get_param("~n"), [round(b - a, 3) for a, b in reads], [round(b - a, 3) for a, b in writes],
                  min(steps, default=0.0), max(steps, default=0.0)), flush=True)
         waits = sorted(b - a for a, b in reads)
         self.assertLess(waits[len(waits) // 2], 0.2, "~get_body_state waited (s): %s" % waits)
         self.assertLess(waits[-1], 1.0, "~get_body_state waited (s): %s" % waits)
-        self.assertEqual(late, [], "~clear_body_wrenches answered more than 1 s after the step after the one in "
+        self.assertEqual(late, [], "~clear_body_wrenches answered more than 1 s after the call and after the step in "
                                    "progress: (call s, s after that step)")
 
 if __name__ == "__main__":
