@@ -1,29 +1,49 @@
 #include "implicit_sim/core/model/model.h"
 
 #include <algorithm>
+#include <map>
 
 
 namespace implicit_sim {
 
-int Model::FindBody(const std::string& name) const {
-  for (int i = 0; i < static_cast<int>(bodies.size()); ++i) {
-    if (bodies[i].name == name) return i;
+namespace {
+
+// A name's index through `index` when it indexes all `items` (names are unique), else by a linear scan.
+template <typename Item>
+int FindByName(const std::vector<Item>& items, const std::unordered_map<std::string, int>& index,
+               const std::string& name) {
+  if (index.size() == items.size()) {
+    const auto found = index.find(name);
+    return found == index.end() ? -1 : found->second;
+  }
+  for (int i = 0; i < static_cast<int>(items.size()); ++i) {
+    if (items[i].name == name) return i;
   }
   return -1;
 }
 
-int Model::FindJoint(const std::string& name) const {
-  for (int i = 0; i < static_cast<int>(joints.size()); ++i) {
-    if (joints[i].name == name) return i;
-  }
-  return -1;
+}  // namespace
+
+int Model::FindBody(const std::string& name) const { return FindByName(bodies, body_by_name, name); }
+
+int Model::FindJoint(const std::string& name) const { return FindByName(joints, joint_by_name, name); }
+
+void Model::IndexNames() {
+  body_by_name.clear();
+  joint_by_name.clear();
+  for (int i = 0; i < static_cast<int>(bodies.size()); ++i) body_by_name.emplace(bodies[i].name, i);
+  for (int i = 0; i < static_cast<int>(joints.size()); ++i) joint_by_name.emplace(joints[i].name, i);
+  // Duplicate names (hand-built models): the maps fall short of the vectors and FindByName scans, first match.
+  if (body_by_name.size() != bodies.size()) body_by_name.clear();
+  if (joint_by_name.size() != joints.size()) joint_by_name.clear();
 }
 
-bool Model::Joined(int i, int j) const {
-  for (const Joint& joint : joints) {
-    if ((joint.parent == i && joint.child == j) || (joint.parent == j && joint.child == i)) return true;
+bool Model::Excluded(int i, int j) const {
+  if (!self_collision_group.empty() && self_collision_group[i] >= 0 &&
+      self_collision_group[i] == self_collision_group[j]) {
+    return true;
   }
-  return false;
+  return std::binary_search(excluded_pairs.begin(), excluded_pairs.end(), std::make_pair(std::min(i, j), std::max(i, j)));
 }
 
 const char* SensorTypeName(SensorType type) { return type == SensorType::kImu ? "imu" : "contact"; }
@@ -97,8 +117,20 @@ int64_t Model::ContactPairBound() const {
     if (!bodies[b].is_fixed) within_moving_bodies += k * (k - 1) / 2;
   }
   int64_t bound = moving * (moving - 1) / 2 - within_moving_bodies + moving * fixed;
+  // Less the pairs inside each self-collision group, counted as the whole scene's are.
+  std::map<int, std::array<int64_t, 3>> groups;  // group -> moving shapes, fixed shapes, pairs within moving bodies
+  for (int b = 0; b < static_cast<int>(self_collision_group.size()); ++b) {
+    if (self_collision_group[b] < 0) continue;
+    std::array<int64_t, 3>& g = groups[self_collision_group[b]];
+    const int64_t k = shapes_of(b);
+    g[bodies[b].is_fixed ? 1 : 0] += k;
+    if (!bodies[b].is_fixed) g[2] += k * (k - 1) / 2;
+  }
+  for (const auto& [group, g] : groups) bound -= g[0] * (g[0] - 1) / 2 - g[2] + g[0] * g[1];
   for (const auto& [i, j] : excluded_pairs) {
-    if (!(bodies[i].is_fixed && bodies[j].is_fixed)) bound -= shapes_of(i) * shapes_of(j);
+    const bool in_one_group = !self_collision_group.empty() && self_collision_group[i] >= 0 &&
+                              self_collision_group[i] == self_collision_group[j];
+    if (!in_one_group && !(bodies[i].is_fixed && bodies[j].is_fixed)) bound -= shapes_of(i) * shapes_of(j);
   }
   return bound;
 }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <set>
@@ -58,7 +59,7 @@ std::string RequireLink(const tinyxml2::XMLElement* e, const char* attribute, co
 
 }  // namespace
 
-std::vector<std::pair<int, int>> ExcludeSelfCollisions(const tinyxml2::XMLElement* sim, const urdf::ModelInterface& urdf, Model* model) {
+void ExcludeSelfCollisions(const tinyxml2::XMLElement* sim, const urdf::ModelInterface& urdf, Model* model) {
   LinkBodies bodies(urdf, *model);
   const int n = static_cast<int>(model->bodies.size());
   std::vector<int> robot(n);
@@ -86,27 +87,72 @@ std::vector<std::pair<int, int>> ExcludeSelfCollisions(const tinyxml2::XMLElemen
   }
   std::sort(excluded.begin(), excluded.end());
   excluded.erase(std::unique(excluded.begin(), excluded.end()), excluded.end());
-  std::vector<std::pair<int, int>> not_self_colliding;  // ascending: bodies are visited in order
-  std::map<int, std::vector<int>> members;  // robot root -> its bodies, ascending
-  for (int b = 0; b < n; ++b) members[Root(&robot, b)].push_back(b);
-  for (const auto& [root, list] : members) {
-    if (list.size() < 2 || self_colliding.count(root)) continue;
-    for (size_t i = 0; i < list.size(); ++i) {
-      for (size_t j = i + 1; j < list.size(); ++j) {
-        const std::pair<int, int> pair(list[i], list[j]);
-        if (!std::binary_search(excluded.begin(), excluded.end(), pair)) not_self_colliding.push_back(pair);
-      }
-    }
+  std::vector<int> robot_size(n, 0);
+  for (int b = 0; b < n; ++b) ++robot_size[Root(&robot, b)];
+  model->self_collision_group.assign(n, -1);
+  for (int b = 0; b < n; ++b) {
+    const int root = Root(&robot, b);
+    if (robot_size[root] > 1 && !self_colliding.count(root)) model->self_collision_group[b] = root;
   }
-  std::sort(not_self_colliding.begin(), not_self_colliding.end());
-  std::vector<std::pair<int, int>> merged;
-  std::merge(excluded.begin(), excluded.end(), not_self_colliding.begin(), not_self_colliding.end(),
-             std::back_inserter(merged));
-  excluded = std::move(merged);
-  return not_self_colliding;
 }
 
-std::string SelfOverlapNote(const Model& model, const std::vector<std::pair<int, int>>& not_self_colliding) {
+namespace {
+
+// Pairs SelfOverlapNote examines at most (each a descent of up to 200 iterations): a robot heaped on itself is noted,
+// not timed out.
+constexpr size_t kMaxOverlapCandidates = 10000;
+
+// The body pairs of one self-collision group whose bounding spheres at the start pose overlap (the first
+// kMaxOverlapCandidates), ascending: a sweep along the axis over which the group's centres spread most.
+std::vector<std::pair<int, int>> SelfCollisionCandidates(const Model& model) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  std::map<int, std::vector<int>> members;  // group -> its bodies, ascending
+  for (int b = 0; b < static_cast<int>(model.self_collision_group.size()); ++b) {
+    if (model.self_collision_group[b] >= 0) members[model.self_collision_group[b]].push_back(b);
+  }
+  std::vector<std::pair<int, int>> candidates;
+  for (const auto& [group, list] : members) {
+    Vec3 low = Vec3::Constant(kInf), high = Vec3::Constant(-kInf);
+    for (int b : list) {
+      low = low.cwiseMin(model.bodies[b].X_WB0.translation());
+      high = high.cwiseMax(model.bodies[b].X_WB0.translation());
+    }
+    int axis = 0;
+    (high - low).maxCoeff(&axis);
+    struct Interval {
+      double lower, upper;
+      int body;
+    };
+    std::vector<Interval> intervals;
+    for (int b : list) {
+      const double centre = model.bodies[b].X_WB0.translation()[axis], reach = model.BodyReach(b);
+      intervals.push_back({centre - reach, centre + reach, b});
+    }
+    std::sort(intervals.begin(), intervals.end(), [](const Interval& a, const Interval& b) { return a.lower < b.lower; });
+    std::vector<Interval> active;
+    for (const Interval& next : intervals) {
+      active.erase(std::remove_if(active.begin(), active.end(), [&](const Interval& a) { return a.upper < next.lower; }),
+                   active.end());
+      for (const Interval& a : active) {
+        const Body &p = model.bodies[a.body], &q = model.bodies[next.body];
+        const double distance = (p.X_WB0.translation() - q.X_WB0.translation()).norm();
+        if (distance <= model.BodyReach(a.body) + model.BodyReach(next.body)) {
+          candidates.emplace_back(std::min(a.body, next.body), std::max(a.body, next.body));
+          if (candidates.size() == kMaxOverlapCandidates) break;
+        }
+      }
+      if (candidates.size() == kMaxOverlapCandidates) break;
+      active.push_back(next);
+    }
+    if (candidates.size() == kMaxOverlapCandidates) break;
+  }
+  std::sort(candidates.begin(), candidates.end());
+  return candidates;
+}
+
+}  // namespace
+
+std::string SelfOverlapNote(const Model& model) {
   constexpr double kReportedDepth = 1e-6;  // m: deeper than the round-off of hulls that touch
   constexpr size_t kNamed = 8;             // pairs named in the line; the rest are counted
   // Rigid groups: bodies welded by fixed joints, and every fixed body with the world (entry n; a joint's parent -1).
@@ -128,7 +174,8 @@ std::string SelfOverlapNote(const Model& model, const std::vector<std::pair<int,
     neighbours.emplace(std::min(a, b), std::max(a, b));
   }
   std::vector<std::string> overlapping;
-  for (const auto& [i, j] : not_self_colliding) {
+  for (const auto& [i, j] : SelfCollisionCandidates(model)) {
+    if (std::binary_search(model.excluded_pairs.begin(), model.excluded_pairs.end(), std::make_pair(i, j))) continue;
     const int gi = Root(&group, i), gj = Root(&group, j);
     if (gi == gj || neighbours.count({std::min(gi, gj), std::max(gi, gj)})) continue;
     const Body &a = model.bodies[i], &b = model.bodies[j];

@@ -25,8 +25,6 @@ namespace implicit_sim {
 using namespace loader;
 namespace {
 
-// Larger scene files are refused before parsing (bytes): 32 MiB holds about 60000 S1 pile bodies.
-constexpr size_t kMaxSceneBytes = size_t{32} << 20;
 // Density of the shapes without <implicit mass> of a moving link without <inertial> (kg/m^3): water, as MuJoCo's
 // default.
 constexpr double kDefaultDensity = 1000.0;
@@ -222,6 +220,24 @@ void CheckLinkElements(const tinyxml2::XMLElement* link, const std::string& name
       if (implicits > 1) Fail(at + ": more than one <implicit>");
     }
   }
+}
+
+// At most kMaxSceneLinks links and as many joints, counted before anything else reads them.
+void CheckElementCounts(const tinyxml2::XMLElement* robot, const std::string& scene) {
+  for (const char* tag : {"link", "joint"}) {
+    int count = 0;
+    for (auto* e = robot->FirstChildElement(tag); e; e = e->NextSiblingElement(tag)) {
+      if (++count > kMaxSceneLinks) {
+        Fail(scene + ": more than " + std::to_string(kMaxSceneLinks) + " <" + tag +
+             "> elements (the loader's limit, kMaxSceneLinks)");
+      }
+    }
+  }
+}
+
+// Throws LoadInterrupted once options.interrupt is due.
+void CheckNotInterrupted(const LoaderOptions& options, const std::string& scene) {
+  if (InterruptDue(options.interrupt)) throw LoadInterrupted(scene + ": loading interrupted");
 }
 
 // Link and joint names unique, joints between defined links, at least one link, every number finite.
@@ -485,6 +501,8 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
   }
   const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
   if (!robot) Fail(scene + ": no <robot> element");
+  CheckElementCounts(robot, scene);
+  CheckNotInterrupted(options, scene);
   LoadNotes notes;
   // Joints first: urdfdom refuses a revolute joint without <limit> with a message that names nothing.
   for (auto* j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
@@ -492,7 +510,9 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
     CheckJointElement(j, "joint '" + std::string(name ? name : "") + "'", &notes);
   }
   CheckUrdfStructure(robot, scene_name);
+  CheckNotInterrupted(options, scene);
   const urdf::ModelInterfaceSharedPtr urdf_model = ParseWithUrdfdom(xml, scene_name);
+  CheckNotInterrupted(options, scene);
   if (!urdf_model->getRoot()) Fail(scene + ": urdfdom found no root link");
   const std::string root = urdf_model->getRoot()->name;
   const RootPlacement placement = PlaceRoot(root, options, scene);
@@ -517,6 +537,7 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
   for (const auto& l : links) by_name[l->name] = l;
   // Keep the file's link order (getLinks is ordered by name). Names are unique and non-empty (CheckUrdfStructure).
   for (auto* e = robot->FirstChildElement("link"); e; e = e->NextSiblingElement("link")) {
+    CheckNotInterrupted(options, scene);  // a link reads at most one mesh per <collision>
     const std::string name = e->Attribute("name");
     const auto found = by_name.find(name);
     if (found == by_name.end()) {  // urdfdom reads a name with markup-like text differently from the XML
@@ -561,6 +582,7 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
     model.bodies.push_back(body);
   }
   if (model.bodies.empty()) Fail("scene '" + scene_name + "': no link besides 'world'");
+  model.IndexNames();  // FindBody by hash from here on (joints: after Finalize)
   for (const urdf::LinkSharedPtr& link : frame_links) {
     FrameLink frame;
     frame.name = link->name;
@@ -605,8 +627,11 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
       }
     }
   }
+  CheckNotInterrupted(options, scene);
   BuildJoints(*urdf_model, joint_starts, placement, &initial_poses, &model, &notes);
-  const std::vector<std::pair<int, int>> not_self_colliding = ExcludeSelfCollisions(sim, *urdf_model, &model);
+  CheckNotInterrupted(options, scene);
+  ExcludeSelfCollisions(sim, *urdf_model, &model);
+  CheckNotInterrupted(options, scene);
   model.Finalize([&](int i, int j) {
     for (const auto& key : {std::make_pair(model.bodies[i].name, model.bodies[j].name),
                             std::make_pair(model.bodies[j].name, model.bodies[i].name)}) {
@@ -614,9 +639,9 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
       if (it != pair_friction.end()) return it->second;
     }
     return default_friction;
-  });
+  }, options.interrupt);
   if (model.moving_bodies.empty()) Fail("scene '" + scene_name + "': no moving body (use a 'floating' joint)");
-  const std::string self_overlap = SelfOverlapNote(model, not_self_colliding);
+  const std::string self_overlap = SelfOverlapNote(model);
   if (!self_overlap.empty()) notes.Add("self_overlap", self_overlap);
   if (!from_density.empty()) {
     std::string names;

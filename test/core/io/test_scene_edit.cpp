@@ -304,10 +304,7 @@ TEST(SceneEdit, SpawnTakesJointPositionsSelfCollideAndAnSrdf) {
   EXPECT_EQ(plain.joints[plain.FindJoint("r1/shoulder")].applied_effort, 1.0);
   const int base = plain.FindBody("r1/base"), upper = plain.FindBody("r1/upper_arm");
   const int fore = plain.FindBody("r1/forearm");
-  auto excluded = [](const Model& m, int a, int b) {
-    return std::binary_search(m.excluded_pairs.begin(), m.excluded_pairs.end(),
-                              std::make_pair(std::min(a, b), std::max(a, b)));
-  };
+  auto excluded = [](const Model& m, int a, int b) { return m.Excluded(a, b); };
   EXPECT_TRUE(excluded(plain, base, fore));  // self-collision off by default: the whole robot
   SceneAddition colliding = arm;
   colliding.self_collide = true;
@@ -358,8 +355,7 @@ TEST(SceneEdit, WithStartEntriesSetsAScenesJointPositionsAndSrdfPairs) {
   EXPECT_NEAR(JointPosition(m, State::Initial(m), m.FindJoint("elbow")), 0.25, 1e-12);
   EXPECT_EQ(m.joints[m.FindJoint("shoulder")].applied_effort, 1.0);  // the scene's own entry is kept
   const int base = m.FindBody("base"), fore = m.FindBody("forearm");
-  EXPECT_TRUE(std::binary_search(m.excluded_pairs.begin(), m.excluded_pairs.end(),
-                                 std::make_pair(std::min(base, fore), std::max(base, fore))));
+  EXPECT_TRUE(m.Excluded(base, fore));
   try {
     WithStartEntries(scene, {{"knee", 0.1}}, "");
     ADD_FAILURE() << "an unknown joint was accepted";

@@ -179,5 +179,96 @@ TEST(UrdfLoader, AScenePastThePairLimitIsRefusedBeforeItsPairsAreFormed) {
   }
 }
 
+// A moving chain of `links` revolute links, each with a sphere, above a fixed floor box (the audit's chain with
+// collisions: every pair of one robot was listed as excluded, N^2/2 of them, and each pair scanned every joint).
+std::string RevoluteChainWithSpheres(int links, const std::string& sim = "") {
+  std::string urdf = "<robot name='chain'><link name='world'/><link name='floor'><collision><geometry><box size='9 9 "
+                     "0.1'/></geometry></collision></link><joint name='f' type='fixed'><parent link='world'/><child "
+                     "link='floor'/><origin xyz='0 0 -1'/></joint>";
+  std::string parent = "world";
+  for (int i = 0; i < links; ++i) {
+    const std::string link = "l" + std::to_string(i);
+    urdf += "<link name='" + link + "'><inertial><mass value='0.1'/><inertia ixx='1e-4' iyy='1e-4' izz='1e-4' ixy='0' "
+            "ixz='0' iyz='0'/></inertial><collision><geometry><sphere radius='0.01'/></geometry></collision></link>"
+            "<joint name='j" + std::to_string(i) + "' type='revolute'><parent link='" + parent + "'/><child link='" +
+            link + "'/><origin xyz='0 0 0.05'/><axis xyz='0 1 0'/><limit lower='-1' upper='1' effort='1' "
+            "velocity='1'/></joint>";
+    parent = link;
+  }
+  return urdf + sim + "</robot>";
+}
+
+// One robot without self-collision is one group: its pairs are never listed, so a 5000-link chain loads with only its
+// pairs with the floor, and names are found by hash.
+TEST(UrdfLoader, ALongChainWithCollisionsFormsOnlyItsPairsWithOtherBodies) {
+  constexpr int kLinks = 5000;
+  const Model model = LoadSceneFromString(RevoluteChainWithSpheres(kLinks), "chain");
+  ASSERT_EQ(model.bodies.size(), static_cast<size_t>(kLinks + 1));
+  EXPECT_EQ(model.pairs.size(), static_cast<size_t>(kLinks));  // each link with the floor
+  EXPECT_EQ(model.ContactPairBound(), static_cast<int64_t>(kLinks));
+  EXPECT_TRUE(model.excluded_pairs.empty());
+  const int first = model.FindBody("l0"), last = model.FindBody("l" + std::to_string(kLinks - 1));
+  EXPECT_TRUE(model.Excluded(first, last));
+  EXPECT_FALSE(model.Excluded(first, model.FindBody("floor")));
+  EXPECT_LT(model.PairIndex(first, last), 0);
+  EXPECT_GE(model.PairIndex(last, model.FindBody("floor")), 0);
+  for (int b = 0; b < static_cast<int>(model.bodies.size()); ++b) EXPECT_EQ(model.FindBody(model.bodies[b].name), b);
+  for (int j = 0; j < static_cast<int>(model.joints.size()); ++j) EXPECT_EQ(model.FindJoint(model.joints[j].name), j);
+  EXPECT_EQ(model.FindBody("l" + std::to_string(kLinks)), -1);
+  EXPECT_EQ(model.FindJoint("floor"), -1);
+}
+
+// With self-collision on, the links not joined form pairs (the bound counts the joined ones too), and a
+// <disable_collisions> pair is left out.
+TEST(UrdfLoader, ASelfCollidingChainPairsEveryTwoLinksNoJointJoins) {
+  constexpr int kLinks = 40;
+  const Model model = LoadSceneFromString(
+      RevoluteChainWithSpheres(kLinks, "<implicit_sim><self_collide link='l3'/><disable_collisions link1='l0' "
+                                       "link2='l9'/></implicit_sim>"),
+      "chain");
+  const int64_t within = int64_t{kLinks} * (kLinks - 1) / 2;
+  EXPECT_EQ(model.pairs.size(), static_cast<size_t>(within - (kLinks - 1) - 1 + kLinks));
+  EXPECT_EQ(model.ContactPairBound(), within - 1 + kLinks);
+  EXPECT_LT(model.PairIndex(model.FindBody("l0"), model.FindBody("l9")), 0);
+  EXPECT_GE(model.PairIndex(model.FindBody("l0"), model.FindBody("l8")), 0);
+  EXPECT_LT(model.PairIndex(model.FindBody("l4"), model.FindBody("l5")), 0);  // joined
+}
+
+// Past kMaxSceneLinks <link> elements a scene is refused right after the XML parse, with the limit in the message.
+TEST(UrdfLoader, MoreLinksThanTheLimitAreRefusedBeforeTheyAreRead) {
+  std::string urdf = "<robot name='links'><link name='world'/>";
+  for (int i = 0; i < kMaxSceneLinks; ++i) urdf += "<link name='x" + std::to_string(i) + "'/>";
+  urdf += "</robot>";
+  try {
+    LoadSceneFromString(urdf, "links");
+    ADD_FAILURE() << "loaded";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "scene 'links': more than 50000 <link> elements (the loader's limit, kMaxSceneLinks)");
+  }
+}
+
+// A load whose interrupt is due (requested, or past its deadline) throws LoadInterrupted and returns nothing.
+TEST(UrdfLoader, ALoadWhoseInterruptIsDueEndsWithLoadInterrupted) {
+  const std::string urdf = RevoluteChainWithSpheres(200);
+  for (bool by_deadline : {false, true}) {
+    StepInterrupt interrupt;
+    if (by_deadline) {
+      interrupt.SetDeadlineIn(0.0);
+    } else {
+      interrupt.Request();
+    }
+    LoaderOptions options;
+    options.interrupt = &interrupt;
+    try {
+      LoadSceneFromString(urdf, "chain", options);
+      ADD_FAILURE() << "loaded";
+    } catch (const LoadInterrupted& e) {
+      EXPECT_STREQ(e.what(), "scene 'chain': loading interrupted");
+    }
+    interrupt.Clear();
+    EXPECT_EQ(LoadSceneFromString(urdf, "chain", options).bodies.size(), 201u);
+  }
+}
+
 }  // namespace
 }  // namespace implicit_sim

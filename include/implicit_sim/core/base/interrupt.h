@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdint>
 #include <limits>
+#include <stdexcept>
 
 namespace implicit_sim {
 
@@ -44,6 +45,11 @@ class StepInterrupt {
   static_assert(std::atomic<bool>::is_always_lock_free, "Request() must be async-signal-safe");
   std::atomic<bool> requested_{false};
   std::atomic<int64_t> deadline_ns_{kNoDeadline};
+};
+
+// A load (core/model/urdf_loader.h) that saw its interrupt due: nothing was loaded.
+struct LoadInterrupted : std::runtime_error {
+  using std::runtime_error::runtime_error;
 };
 
 // Whether `interrupt` (may be null: never) is due.

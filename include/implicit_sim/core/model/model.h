@@ -6,9 +6,11 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
+#include "implicit_sim/core/base/interrupt.h"
 #include "implicit_sim/core/geometry/broad_phase.h"
 #include "implicit_sim/core/geometry/shapes.h"
 
@@ -136,9 +138,12 @@ struct Model {
   std::vector<int> pairs_of_lower;
   Vec3 gravity_W = Vec3(0.0, 0.0, -9.81);  // m/s^2
   std::string scene_name;
-  // Body pairs (lower index, higher index; sorted) that form no contact pair: links of one robot without
-  // self-collision and pairs a scene or SRDF disables (doc/scenes.md#self-collision). Set before Finalize.
+  // Body pairs that form no contact pair (doc/scenes.md#self-collision), set before Finalize: the pairs a scene or SRDF
+  // disables (lower index, higher index; sorted), and per body its robot's group when that robot does not collide with
+  // itself (-1: none; empty: no groups). Two bodies of one group never form a pair.
   std::vector<std::pair<int, int>> excluded_pairs;
+  std::vector<int> self_collision_group;
+  std::unordered_map<std::string, int> body_by_name, joint_by_name;  // IndexNames
 
   int num_moving() const { return static_cast<int>(moving_bodies.size()); }
   // Sizes of State::q (position and unit quaternion per moving body) and State::v (linear and angular velocity).
@@ -150,9 +155,13 @@ struct Model {
   // at +3); the same offsets index 6-per-body wrench vectors.
   static int q_offset(int slot) { return kBodyNq * slot; }
   static int v_offset(int slot) { return kBodyNv * slot; }
-  int FindBody(const std::string& name) const;  // -1 if absent
-  int FindJoint(const std::string& name) const;  // -1 if absent
-  bool Joined(int i, int j) const;  // whether a joint joins bodies i and j directly
+  // -1 if absent. By hash once IndexNames (Finalize) has indexed every body or joint; by a linear scan before.
+  int FindBody(const std::string& name) const;
+  int FindJoint(const std::string& name) const;
+  // Indexes the bodies' and joints' names for FindBody and FindJoint; again after any change of bodies or joints.
+  void IndexNames();
+  // Whether bodies i and j form no pair by excluded_pairs or self_collision_group (joints aside).
+  bool Excluded(int i, int j) const;
   const ConvexShape& shape(int geom) const { return bodies[geoms[geom].body].shapes[geoms[geom].index]; }
   // The pair of geoms i and j (either order), -1 if they form none (one body, both fixed, or joined bodies).
   int GeomPairIndex(int i, int j) const;
@@ -164,12 +173,12 @@ struct Model {
   // The largest distance from a body's centre of mass to a point of its shapes (m): 0 without shapes, +inf for a
   // half-space or a general intersection.
   double BodyReach(int body) const;
-  // Builds moving_bodies, velocity_slot, geoms and one pair for every two shapes of two bodies of which at least one
-  // moves, that no joint joins directly (adjacent links touch at their joint by design, as in MoveIt's default ACM)
-  // and that excluded_pairs does not list. `pair_friction(i, j)` gives the friction of bodies i and j; bodies must
-  // already be filled in.
+  // Builds moving_bodies, velocity_slot, geoms, the name index and one pair for every two shapes of two bodies of which
+  // at least one moves, that no joint joins directly (adjacent links touch at their joint by design, as in MoveIt's
+  // default ACM) and that are not Excluded. `pair_friction(i, j)` gives the friction of bodies i and j; bodies must
+  // already be filled in. Watches `interrupt` between geoms (LoadInterrupted).
   template <typename FrictionOf>
-  void Finalize(FrictionOf pair_friction);
+  void Finalize(FrictionOf pair_friction, const StepInterrupt* interrupt = nullptr);
   // The most contact pairs Finalize can form from the bodies' shapes (every two shapes of two bodies of which one moves,
   // less the excluded body pairs), counted without forming them.
   int64_t ContactPairBound() const;
@@ -186,7 +195,7 @@ struct Model {
 BroadPhase MakeBroadPhase(const Model& model);
 
 template <typename FrictionOf>
-void Model::Finalize(FrictionOf pair_friction) {
+void Model::Finalize(FrictionOf pair_friction, const StepInterrupt* interrupt) {
   moving_bodies.clear();
   velocity_slot.assign(bodies.size(), -1);
   for (int i = 0; i < static_cast<int>(bodies.size()); ++i) {
@@ -195,6 +204,7 @@ void Model::Finalize(FrictionOf pair_friction) {
       moving_bodies.push_back(i);
     }
   }
+  IndexNames();
   geoms.clear();
   for (int b = 0; b < static_cast<int>(bodies.size()); ++b) {
     for (int k = 0; k < static_cast<int>(bodies[b].shapes.size()); ++k) geoms.push_back(Geom{b, k});
@@ -207,16 +217,22 @@ void Model::Finalize(FrictionOf pair_friction) {
                                 " (Model::kMaxContactPairs; every pair is stored, about 80 bytes each): fewer moving "
                                 "bodies, or fewer shapes on them");
   }
+  std::vector<std::pair<int, int>> joined;  // body pairs a joint joins, sorted
+  for (const Joint& joint : joints) {
+    if (joint.parent >= 0) joined.emplace_back(std::min(joint.parent, joint.child), std::max(joint.parent, joint.child));
+  }
+  std::sort(joined.begin(), joined.end());
   pairs.clear();
   pairs_of_lower.assign(geoms.size() + 1, 0);
   for (int gi = 0; gi < static_cast<int>(geoms.size()); ++gi) {
+    if (InterruptDue(interrupt)) throw LoadInterrupted("scene '" + scene_name + "': loading interrupted");
     pairs_of_lower[gi] = static_cast<int>(pairs.size());
     const int i = geoms[gi].body;
     for (int gj = gi + 1; gj < static_cast<int>(geoms.size()); ++gj) {
       const int j = geoms[gj].body;
       if (i == j || (bodies[i].is_fixed && bodies[j].is_fixed)) continue;
       if (shape(gi).inequalities.empty() || shape(gj).inequalities.empty()) continue;
-      if (Joined(i, j) || std::binary_search(excluded_pairs.begin(), excluded_pairs.end(), std::make_pair(i, j))) continue;
+      if (Excluded(i, j) || std::binary_search(joined.begin(), joined.end(), std::make_pair(i, j))) continue;
       const bool swap = bodies[i].is_fixed;  // body1 moves
       ContactPair pair;
       pair.body1 = swap ? j : i;

@@ -20,10 +20,18 @@
 #include <vector>
 
 #include "implicit_sim/core/base/file_sandbox.h"
+#include "implicit_sim/core/base/interrupt.h"
 #include "implicit_sim/core/model/mesh_hull_cache.h"
 #include "implicit_sim/core/model/model.h"
 
 namespace implicit_sim {
+
+// What one load may take (doc/scenes.md#limits): larger scene files are refused before they are read (bytes; the
+// largest shipped pile, 4000 ellipsoids, is 2.3 MB), scenes with more <link> or <joint> elements right after the XML
+// parse. Together they bound a load to a few seconds and a few hundred MB; the contact pairs are bounded by
+// Model::kMaxContactPairs.
+constexpr size_t kMaxSceneBytes = size_t{16} << 20;
+constexpr int kMaxSceneLinks = 50000;
 
 struct LoaderOptions {
   // A root link other than 'world': false welds it to the world at X_W_root (a static body), true makes it a free
@@ -54,15 +62,19 @@ struct LoaderOptions {
   // The loader's notes, one line each (mesh hulls, vendor attributes ignored, mass from geometry, wide revolute
   // ranges) are appended here; null: written to std::cerr.
   std::vector<std::string>* warnings = nullptr;
+  // Watched between the loader's stages and between links (a mesh hull each at most): once it is due, the load throws
+  // LoadInterrupted. Null: never. The node and the Python API point it at their SIGINT and SIGTERM handling; the
+  // longest stretch without a check is urdfdom's parse (about 1 s for a file at kMaxSceneBytes).
+  const StepInterrupt* interrupt = nullptr;
 };
 
-// Throws std::invalid_argument naming the link, joint or attribute and the allowed range. Never returns a partial
-// model.
+// Throws std::invalid_argument naming the link, joint or attribute and the allowed range, LoadInterrupted when
+// options.interrupt became due. Never returns a partial model.
 Model LoadSceneFromString(const std::string& urdf_xml, const std::string& scene_name = "scene",
                           const LoaderOptions& options = LoaderOptions());
 Model LoadSceneFromFile(const std::string& path, const LoaderOptions& options = LoaderOptions());
 // The text of a scene file, refused (std::invalid_argument naming the file) when it is not a readable regular file or
-// is larger than the loader's limit (32 MiB), before reading it.
+// is larger than kMaxSceneBytes, before reading it.
 std::string ReadSceneFile(const std::string& path);
 
 }  // namespace implicit_sim
