@@ -1,24 +1,47 @@
 // Model: loading a scene, and read-only access to its bodies, joints and pairs; surface meshes for drawing.
+#include <functional>
+
 #include <pybind11/stl.h>
 
 #include "implicit_sim/core/geometry/surface_mesh.h"
 #include "implicit_sim/core/model/urdf_loader.h"
 #include "py_types.h"
+#include "sigint_during_call.h"
 
 namespace implicit_sim {
 namespace python {
 namespace {
 
+// A load with the GIL released (a mesh collision's hull can take a while) that Ctrl-C stops between two links: the
+// loader's LoadInterrupted becomes Python's KeyboardInterrupt.
+ModelPtr LoadInterruptibly(const std::function<Model(const LoaderOptions&)>& load, LoaderOptions options) {
+  StepInterrupt interrupt;
+  options.interrupt = &interrupt;
+  ModelPtr model;
+  std::string interrupted;
+  {
+    SigintDuringCall sigint(&interrupt);
+    py::gil_scoped_release release;
+    try {
+      model = std::make_shared<Model>(load(options));
+    } catch (const LoadInterrupted& e) {
+      interrupted = e.what();
+    }
+  }
+  if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // KeyboardInterrupt
+  if (!model) throw std::runtime_error(interrupted);              // SIGINT with Python's handler ignoring it
+  return model;
+}
+
 ModelPtr LoadFile(const std::string& path) {
-  py::gil_scoped_release release;  // a mesh collision's hull can take a while
-  return std::make_shared<Model>(LoadSceneFromFile(path));
+  return LoadInterruptibly([&](const LoaderOptions& options) { return LoadSceneFromFile(path, options); },
+                           LoaderOptions());
 }
 
 ModelPtr LoadString(const std::string& xml, const std::string& name, const std::string& mesh_directory) {
   LoaderOptions options;
   options.mesh_directory = mesh_directory;
-  py::gil_scoped_release release;
-  return std::make_shared<Model>(LoadSceneFromString(xml, name, options));
+  return LoadInterruptibly([&](const LoaderOptions& o) { return LoadSceneFromString(xml, name, o); }, options);
 }
 
 const Body& BodyAt(const Model& model, int body) { return model.bodies[CheckBodyIndex(model, body)]; }

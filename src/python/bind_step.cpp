@@ -1,5 +1,4 @@
 // Data, step and its report, contact results, warm starts, joint drives and applied wrenches.
-#include <signal.h>
 
 #include <atomic>
 #include <cmath>
@@ -13,6 +12,7 @@
 #include "implicit_sim/core/model/wrench.h"
 #include "implicit_sim/core/step/time_stepper.h"
 #include "py_types.h"
+#include "sigint_during_call.h"
 
 namespace implicit_sim {
 namespace python {
@@ -62,43 +62,6 @@ void CheckNotStepping(const PyData& data) {
   if (data.stepping) throw py::value_error(kDataBusy);
 }
 
-// SIGINT while the main thread steps with the GIL released: the step is interrupted (and undone), then Python's own
-// handler, chained here, raises KeyboardInterrupt once the GIL is back. Only the main thread installs it (Python
-// delivers signals there), one step at a time.
-std::atomic<StepInterrupt*> g_sigint_interrupt{nullptr};
-struct sigaction g_python_sigint;
-
-extern "C" void OnSigintDuringStep(int signal_number) {
-  if (StepInterrupt* interrupt = g_sigint_interrupt.load()) interrupt->Request();
-  if (g_python_sigint.sa_handler != SIG_DFL && g_python_sigint.sa_handler != SIG_IGN) {
-    g_python_sigint.sa_handler(signal_number);
-  }
-}
-
-class SigintDuringStep {
- public:
-  explicit SigintDuringStep(StepInterrupt* interrupt) {
-    const py::object threading = py::module_::import("threading");
-    if (!threading.attr("current_thread")().is(threading.attr("main_thread")())) return;
-    struct sigaction ours = {};
-    ours.sa_handler = OnSigintDuringStep;
-    sigemptyset(&ours.sa_mask);
-    g_sigint_interrupt = interrupt;
-    installed_ = sigaction(SIGINT, &ours, &g_python_sigint) == 0;
-    if (!installed_) g_sigint_interrupt = nullptr;
-  }
-  ~SigintDuringStep() {
-    if (!installed_) return;
-    sigaction(SIGINT, &g_python_sigint, nullptr);
-    g_sigint_interrupt = nullptr;
-  }
-  SigintDuringStep(const SigintDuringStep&) = delete;
-  SigintDuringStep& operator=(const SigintDuringStep&) = delete;
-
- private:
-  bool installed_ = false;
-};
-
 // Step with the external wrench and joint efforts of this step (either may be None), the GIL released while the core
 // steps, and max_wall (s, or None) as the step's deadline. The inputs are checked before the state is touched.
 StepReport StepOnce(const Model& model, const StepperOptions& options, PyState* state, PyData* data,
@@ -135,7 +98,7 @@ StepReport StepOnce(const Model& model, const StepperOptions& options, PyState* 
   data->data.interrupt = &data->interrupt;
   StepReport report;
   {
-    SigintDuringStep sigint(&data->interrupt);
+    SigintDuringCall sigint(&data->interrupt);
     py::gil_scoped_release release;
     report = Step(model, options, &state->state, &data->data, wrench_W);
   }

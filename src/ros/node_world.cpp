@@ -104,7 +104,7 @@ bool SimNode::OnSpawn(implicit_sim::Spawn::Request& req, implicit_sim::Spawn::Re
            try {
              std::vector<std::string> added;
              const std::string urdf = AddToScene(world_->urdf, addition, &added);
-             std::unique_ptr<World> next = EditedWorld(params_, *world_, urdf);
+             std::unique_ptr<World> next = EditedWorld(params_, *world_, urdf, stop_);
              std::string overlap;
              Data check(*next->model);
              if (FindInitialOverlap(*next->model, next->state, options_.overlap_tolerance, &check, &overlap)) {
@@ -129,7 +129,7 @@ bool SimNode::OnDelete(implicit_sim::Delete::Request& req, implicit_sim::Delete:
            try {
              std::vector<std::string> removed;
              const std::string urdf = RemoveFromScene(world_->urdf, req.bodies, &removed);
-             std::unique_ptr<World> next = EditedWorld(params_, *world_, urdf);
+             std::unique_ptr<World> next = EditedWorld(params_, *world_, urdf, stop_);
              ReplaceWorld(std::move(next));
              JournalUnreplayable("~delete");
              res.deleted = removed;
@@ -158,7 +158,7 @@ bool SimNode::OnLoadScene(implicit_sim::LoadScene::Request& req, implicit_sim::L
   std::unique_ptr<World> next;
   try {
     scene.urdf = WithStartEntries(scene.urdf, positions, req.srdf);
-    next = BuildWorld(params_, scene);  // off the physics thread: loading a large scene does not hold the steps up
+    next = BuildWorld(params_, scene, stop_);  // off the physics thread: loading a large scene does not hold the steps up
   } catch (const std::exception& e) {
     res.success = false;
     res.message = e.what();

@@ -27,9 +27,9 @@ constexpr double kMaxPaceLagS = 0.1;
 
 }  // namespace
 
-SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh)
-    : nh_(nh), pnh_(pnh), params_(NodeParams::Read(pnh)), options_(params_.options) {
-  world_ = BuildWorld(params_, ReadNodeScene(nh, params_));
+SimNode::SimNode(ros::NodeHandle nh, ros::NodeHandle pnh, StepInterrupt* stop)
+    : nh_(nh), pnh_(pnh), params_(NodeParams::Read(pnh)), options_(params_.options), stop_(stop ? stop : &own_stop_) {
+  world_ = BuildWorld(params_, ReadNodeScene(nh, params_), stop_);
   journal_ = std::make_unique<NodeJournal>(params_.input_journal, params_.replay_journal);
   PublishRobotDescription(world_->urdf);
   const Model& model = *world_->model;
@@ -109,6 +109,7 @@ void SimNode::StartThread(std::thread* thread, void (SimNode::*loop)()) {
 
 bool SimNode::StopThreads(double grace_s) {
   stopping_ = true;
+  stop_->Request();       // a scene loading on a service thread stops between two links
   interrupt_.Request();  // the step in progress stops between two factorizations
   mailbox_.Stop();
   {

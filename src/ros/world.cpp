@@ -49,8 +49,9 @@ std::string ResolvePackageUri(const std::string& uri) {
 namespace {
 
 LoaderOptions SceneLoaderOptions(const NodeParams& params, const std::string& mesh_directory,
-                                 std::vector<std::string>* warnings) {
+                                 std::vector<std::string>* warnings, const StepInterrupt* stop) {
   LoaderOptions options;
+  options.interrupt = stop;
   options.floating_root = params.floating_root;
   options.resolve_package_uri = ResolvePackageUri;
   options.mesh_directory = mesh_directory;
@@ -165,10 +166,10 @@ bool ReadRequestedScene(const NodeParams& params, const std::string& urdf, const
   return true;
 }
 
-std::unique_ptr<World> BuildWorld(const NodeParams& params, const SceneText& scene) {
+std::unique_ptr<World> BuildWorld(const NodeParams& params, const SceneText& scene, const StepInterrupt* stop) {
   std::vector<std::string> warnings;
   auto model = std::make_shared<const Model>(
-      LoadSceneFromString(scene.urdf, scene.name, SceneLoaderOptions(params, scene.dir, &warnings)));
+      LoadSceneFromString(scene.urdf, scene.name, SceneLoaderOptions(params, scene.dir, &warnings, stop)));
   LogNewWarnings(warnings);
   CheckWorldFrame(*model, params.world_frame);
   auto world = std::make_unique<World>(std::move(model));
@@ -177,8 +178,9 @@ std::unique_ptr<World> BuildWorld(const NodeParams& params, const SceneText& sce
   return world;
 }
 
-std::unique_ptr<World> EditedWorld(const NodeParams& params, const World& current, const std::string& urdf) {
-  std::unique_ptr<World> next = BuildWorld(params, SceneText{urdf, current.model->scene_name, current.scene_dir});
+std::unique_ptr<World> EditedWorld(const NodeParams& params, const World& current, const std::string& urdf,
+                                   const StepInterrupt* stop) {
+  std::unique_ptr<World> next = BuildWorld(params, SceneText{urdf, current.model->scene_name, current.scene_dir}, stop);
   CarryOver(current, next.get());
   return next;
 }

@@ -72,7 +72,7 @@ class ReadPolicy : public ::testing::Test {
   // The loader's refusal of a scene whose mesh is `uri`, the URI taken out ("" if it loaded).
   std::string MeshRefusal(const std::string& uri) {
     try {
-      BuildWorld(params_, SceneText{MeshScene(uri), "meshy", (root_ / "scenes").string()});
+      BuildWorld(params_, SceneText{MeshScene(uri), "meshy", (root_ / "scenes").string()}, nullptr);
     } catch (const std::invalid_argument& e) {
       return Without(e.what(), uri);
     }

@@ -65,8 +65,10 @@ bool ShuttingDownAnswer(Response& res) {
 
 class SimNode {
  public:
-  // Loads the scene and sets up publishers and services; throws std::invalid_argument for a bad parameter or scene.
-  SimNode(ros::NodeHandle nh, ros::NodeHandle pnh);
+  // Loads the scene and sets up publishers and services; throws std::invalid_argument for a bad parameter or scene,
+  // LoadInterrupted when `stop` (main's SIGINT and SIGTERM; null: the node's own) was requested during the load.
+  // Every later load (~load_scene, ~spawn, ~delete) watches it too, and shutdown requests it.
+  SimNode(ros::NodeHandle nh, ros::NodeHandle pnh, StepInterrupt* stop = nullptr);
   ~SimNode();
   // Starts the physics, publishing and diagnostics threads and blocks until ROS shuts down.
   void Run();
@@ -169,6 +171,8 @@ class SimNode {
   // Stops the step in progress (Data::interrupt) when a ~run_steps job is cancelled, at shutdown, and when a service's
   // command has waited kCutStepAfter for it (CutStepForCommand).
   StepInterrupt interrupt_;
+  StepInterrupt own_stop_;
+  StepInterrupt* stop_;  // main's or own_stop_: requested by SIGINT, SIGTERM and StopThreads; loads watch it
   // A service's command that has waited this long cuts the step in progress: the step is undone, the command runs and
   // the step is redone from its start state, so results are as if the command had come before it. A redone step is
   // not cut again (the simulation always advances); shutdown and a cancelled job still stop it.

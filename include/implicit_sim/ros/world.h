@@ -72,11 +72,12 @@ bool ReadRequestedScene(const NodeParams& params, const std::string& urdf, const
                         std::string* error);
 
 // Loads `scene` as a world at its initial state; throws std::invalid_argument (the loader's message, or a
-// ~world_frame that names a link).
-std::unique_ptr<World> BuildWorld(const NodeParams& params, const SceneText& scene);
+// ~world_frame that names a link), LoadInterrupted once `stop` (may be null) is due.
+std::unique_ptr<World> BuildWorld(const NodeParams& params, const SceneText& scene, const StepInterrupt* stop);
 
 // `current` edited to `urdf` (the same scene name and mesh directory): the bodies and joints the two share, matched by
 // name, keep their state, wrenches, efforts, drives, trajectories and drags. Throws as BuildWorld.
-std::unique_ptr<World> EditedWorld(const NodeParams& params, const World& current, const std::string& urdf);
+std::unique_ptr<World> EditedWorld(const NodeParams& params, const World& current, const std::string& urdf,
+                                   const StepInterrupt* stop);
 
 }  // namespace implicit_sim
