@@ -39,11 +39,7 @@ void Model::IndexNames() {
 }
 
 bool Model::Excluded(int i, int j) const {
-  if (!self_collision_group.empty() && self_collision_group[i] >= 0 &&
-      self_collision_group[i] == self_collision_group[j]) {
-    return true;
-  }
-  return std::binary_search(excluded_pairs.begin(), excluded_pairs.end(), std::make_pair(std::min(i, j), std::max(i, j)));
+  return InOneSelfCollisionGroup(i, j) || std::binary_search(excluded_pairs.begin(), excluded_pairs.end(), std::make_pair(std::min(i, j), std::max(i, j)));
 }
 
 const char* SensorTypeName(SensorType type) { return type == SensorType::kImu ? "imu" : "contact"; }
@@ -128,9 +124,7 @@ int64_t Model::ContactPairBound() const {
   }
   for (const auto& [group, g] : groups) bound -= g[0] * (g[0] - 1) / 2 - g[2] + g[0] * g[1];
   for (const auto& [i, j] : excluded_pairs) {
-    const bool in_one_group = !self_collision_group.empty() && self_collision_group[i] >= 0 &&
-                              self_collision_group[i] == self_collision_group[j];
-    if (!in_one_group && !(bodies[i].is_fixed && bodies[j].is_fixed)) bound -= shapes_of(i) * shapes_of(j);
+    if (!InOneSelfCollisionGroup(i, j) && !(bodies[i].is_fixed && bodies[j].is_fixed)) bound -= shapes_of(i) * shapes_of(j);
   }
   return bound;
 }

@@ -235,11 +235,6 @@ void CheckElementCounts(const tinyxml2::XMLElement* robot, const std::string& sc
   }
 }
 
-// Throws LoadInterrupted once options.interrupt is due.
-void CheckNotInterrupted(const LoaderOptions& options, const std::string& scene) {
-  if (InterruptDue(options.interrupt)) throw LoadInterrupted(scene + ": loading interrupted");
-}
-
 // Link and joint names unique, joints between defined links, at least one link, every number finite.
 void CheckUrdfStructure(const tinyxml2::XMLElement* robot, const std::string& scene_name) {
   const std::string scene = "scene '" + scene_name + "'";
@@ -502,7 +497,7 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
   const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
   if (!robot) Fail(scene + ": no <robot> element");
   CheckElementCounts(robot, scene);
-  CheckNotInterrupted(options, scene);
+  ThrowIfLoadInterrupted(options.interrupt, scene_name);
   LoadNotes notes;
   // Joints first: urdfdom refuses a revolute joint without <limit> with a message that names nothing.
   for (auto* j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
@@ -510,9 +505,9 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
     CheckJointElement(j, "joint '" + std::string(name ? name : "") + "'", &notes);
   }
   CheckUrdfStructure(robot, scene_name);
-  CheckNotInterrupted(options, scene);
+  ThrowIfLoadInterrupted(options.interrupt, scene_name);
   const urdf::ModelInterfaceSharedPtr urdf_model = ParseWithUrdfdom(xml, scene_name);
-  CheckNotInterrupted(options, scene);
+  ThrowIfLoadInterrupted(options.interrupt, scene_name);
   if (!urdf_model->getRoot()) Fail(scene + ": urdfdom found no root link");
   const std::string root = urdf_model->getRoot()->name;
   const RootPlacement placement = PlaceRoot(root, options, scene);
@@ -537,7 +532,7 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
   for (const auto& l : links) by_name[l->name] = l;
   // Keep the file's link order (getLinks is ordered by name). Names are unique and non-empty (CheckUrdfStructure).
   for (auto* e = robot->FirstChildElement("link"); e; e = e->NextSiblingElement("link")) {
-    CheckNotInterrupted(options, scene);  // a link reads at most one mesh per <collision>
+    ThrowIfLoadInterrupted(options.interrupt, scene_name);  // a link reads at most one mesh per <collision>
     const std::string name = e->Attribute("name");
     const auto found = by_name.find(name);
     if (found == by_name.end()) {  // urdfdom reads a name with markup-like text differently from the XML
@@ -627,11 +622,11 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
       }
     }
   }
-  CheckNotInterrupted(options, scene);
+  ThrowIfLoadInterrupted(options.interrupt, scene_name);
   BuildJoints(*urdf_model, joint_starts, placement, &initial_poses, &model, &notes);
-  CheckNotInterrupted(options, scene);
+  ThrowIfLoadInterrupted(options.interrupt, scene_name);
   ExcludeSelfCollisions(sim, *urdf_model, &model);
-  CheckNotInterrupted(options, scene);
+  ThrowIfLoadInterrupted(options.interrupt, scene_name);
   model.Finalize([&](int i, int j) {
     for (const auto& key : {std::make_pair(model.bodies[i].name, model.bodies[j].name),
                             std::make_pair(model.bodies[j].name, model.bodies[i].name)}) {

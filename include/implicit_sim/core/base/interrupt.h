@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 namespace implicit_sim {
 
@@ -54,6 +55,11 @@ struct LoadInterrupted : std::runtime_error {
 
 // Whether `interrupt` (may be null: never) is due.
 inline bool InterruptDue(const StepInterrupt* interrupt) { return interrupt != nullptr && interrupt->Due(); }
+
+// For the loader's stages: throws LoadInterrupted ("scene '<name>': loading interrupted") once `interrupt` is due.
+inline void ThrowIfLoadInterrupted(const StepInterrupt* interrupt, const std::string& scene_name) {
+  if (InterruptDue(interrupt)) throw LoadInterrupted("scene '" + scene_name + "': loading interrupted");
+}
 
 // For a main: SIGINT and SIGTERM request `interrupt` (which must outlive the process's use of it); a second signal
 // then acts as it would without the handler (the process ends).

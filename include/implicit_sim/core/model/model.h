@@ -162,6 +162,10 @@ struct Model {
   void IndexNames();
   // Whether bodies i and j form no pair by excluded_pairs or self_collision_group (joints aside).
   bool Excluded(int i, int j) const;
+  bool InOneSelfCollisionGroup(int i, int j) const {
+    return !self_collision_group.empty() && self_collision_group[i] >= 0 &&
+           self_collision_group[i] == self_collision_group[j];
+  }
   const ConvexShape& shape(int geom) const { return bodies[geoms[geom].body].shapes[geoms[geom].index]; }
   // The pair of geoms i and j (either order), -1 if they form none (one body, both fixed, or joined bodies).
   int GeomPairIndex(int i, int j) const;
@@ -225,7 +229,7 @@ void Model::Finalize(FrictionOf pair_friction, const StepInterrupt* interrupt) {
   pairs.clear();
   pairs_of_lower.assign(geoms.size() + 1, 0);
   for (int gi = 0; gi < static_cast<int>(geoms.size()); ++gi) {
-    if (InterruptDue(interrupt)) throw LoadInterrupted("scene '" + scene_name + "': loading interrupted");
+    ThrowIfLoadInterrupted(interrupt, scene_name);
     pairs_of_lower[gi] = static_cast<int>(pairs.size());
     const int i = geoms[gi].body;
     for (int gj = gi + 1; gj < static_cast<int>(geoms.size()); ++gj) {
