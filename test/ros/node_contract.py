@@ -7,12 +7,15 @@ scenes/cube_drop.urdf, real time, publish_rate 30 Hz, no /use_sim_time so the ti
 - during a ~run_steps goal of 1e6 steps, services, /clock and feedback stay responsive; the goal cancels within 1 s;
 - /diagnostics stays ERROR while a refused step holds the simulation, and OK again after ~reset; WARN, naming the
   slowest step and the ladder's rungs, while the simulation falls below half its real_time_factor;
-- SIGINT stops a second node within 2 s while it runs a 1e6-step goal;
+- ~pause cuts a long step of P3 and ~delete one of the jam scene (the step undone, answered within 0.5 s);
+- SIGINT stops a second node within 2 s while it runs a 1e6-step goal, and within 1.5 s in the middle of loading a
+  20 000-link chain (as its startup scene and by ~load_scene), with status 0;
 - every launch file declares every argument of sim.launch (with a doc) and passes them all on;
 - dragging a body's interactive marker holds it where a critically damped spring predicts; releasing drops it;
 - dynamic_reconfigure applies good values at once and refuses NaN, Inf and out-of-range ones, keeping the previous."""
 import math
 import os
+import shutil
 import signal
 import socket
 import subprocess
@@ -34,7 +37,7 @@ from xml.etree import ElementTree
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Point, Pose, Vector3, Wrench
 from implicit_sim.msg import BodyStates, RunStepsAction, RunStepsGoal
-from implicit_sim.srv import ApplyBodyWrench, Delete, GetBodyState, Spawn, Step
+from implicit_sim.srv import ApplyBodyWrench, Delete, GetBodyState, LoadScene, Spawn, Step
 from rosgraph_msgs.msg import Clock
 from std_srvs.srv import Trigger
 from tf2_msgs.msg import TFMessage
@@ -71,6 +74,17 @@ def sphere_stack_urdf(n, radius=0.05):
                              '<origin xyz="%g %g %g"/></joint>' % (name, name, i * pitch + 0.0003 * k, j * pitch,
                                                                    radius + 0.001 + k * pitch))
     return "".join(parts) + "</robot>"
+
+
+def revolute_chain_urdf(n):
+    """A chain of n links of 1 kg on revolute joints (5 cm apart, up from the world), a 1 cm sphere on each link."""
+    link = ('<link name="l%d"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/>'
+            '</inertial><collision><geometry><sphere radius="0.01"/></geometry></collision></link>'
+            '<joint name="j%d" type="revolute"><parent link="%s"/><child link="l%d"/><origin xyz="0 0 0.05"/>'
+            '<axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>\n')
+    parts = ['<robot name="chain"><link name="world"/>\n']
+    parts += [link % (i, i, "world" if i == 0 else "l%d" % (i - 1), i) for i in range(n)]
+    return "".join(parts) + "</robot>\n"
 
 
 class Recorder:
@@ -408,6 +422,91 @@ class NodeContract(unittest.TestCase):
         self.assertEqual(state.message, "t = 0 s")  # the cut step was undone: no time passed
         self.assertGreater(step_s, 3.0)  # so the pause 1 s after the start came during the first step
         self.assertLess(pause_s, 0.5)
+
+    def test_6d_sigint_stops_a_node_within_1_5_s_in_the_middle_of_a_scene_load(self):
+        # A 20 000-link revolute chain with a sphere on each link (7.5 MB) takes several seconds to load: SIGINT 1.5 s
+        # into its load, as the startup scene and by ~load_scene of a running node, must end the node with status 0.
+        scenes = tempfile.mkdtemp(prefix="implicit_sim_chain_")
+        with open(os.path.join(scenes, "chain20k.urdf"), "w") as out:
+            out.write(revolute_chain_urdf(20000))
+        times, answers = {}, []
+        for case in ("startup", "load_scene"):
+            name = "/sigint_load_node"
+            scene = "chain20k" if case == "startup" else "p3_sphere_on_two_spheres"
+            node = subprocess.Popen(["rosrun", "implicit_sim", "implicit_sim_node", "__name:=" + name[1:],
+                                     "_scene:=" + scene, "_scenes_dir:=" + scenes, "_paused:=true",
+                                     "clock:=/sigint_load_clock",
+                                     "tf:=/sigint_load_tf", "tf_static:=/sigint_load_tf_static",
+                                     "diagnostics:=/sigint_load_diagnostics",
+                                     "joint_states:=/sigint_load_joint_states"],
+                                    stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
+            try:
+                if case == "load_scene":
+                    shutil.copy(os.path.join(SOURCE_DIR, "scenes", scene + ".urdf"), scenes)
+                    rospy.wait_for_service(name + "/load_scene", timeout=20)
+                    proxy = rospy.ServiceProxy(name + "/load_scene", LoadScene)
+
+                    def load():
+                        try:
+                            answers.append(proxy(file="chain20k").message)
+                        except rospy.ServiceException:
+                            pass  # the node ended before its answer was read
+                    loader = threading.Thread(target=load, daemon=True)
+                    loader.start()
+                time.sleep(1.5)
+                self.assertIsNone(node.poll(), case + ": the node ended before the signal")
+                start = time.monotonic()
+                os.killpg(node.pid, signal.SIGINT)
+                code = node.wait(timeout=20)
+                times[case] = time.monotonic() - start
+                err = node.stderr.read().decode()
+            finally:
+                if node.poll() is None:
+                    os.killpg(node.pid, signal.SIGKILL)
+                    node.wait()
+            self.assertEqual(code, 0, case + ": " + err[-2000:])
+            self.assertLess(times[case], 1.5, case)
+            if case == "startup":
+                self.assertIn("loading interrupted (shutdown requested)", err)
+            else:  # the service answers the interruption if its answer leaves before the node ends
+                loader.join(timeout=5)
+                self.assertTrue(all("loading interrupted" in a for a in answers), answers)
+        shutil.rmtree(scenes)
+        print("[ INFO ] SIGINT during the load of a 20 000-link chain: the node exits 0 after %.3f s (startup), "
+              "%.3f s (~load_scene)" % (times["startup"], times["load_scene"]), flush=True)
+
+    def test_6e_delete_cuts_a_long_step_of_the_jam_and_the_world_goes_on_without_the_body(self):
+        # The jam scene (the gripper pressed among 20 spheres) with every Newton solve run to 3000 iterations: ~delete
+        # of a sphere the fingers press, 1 s into the first step, cuts it, and the world goes on without the sphere.
+        name = "/long_jam_node"
+        node = subprocess.Popen(["rosrun", "implicit_sim", "implicit_sim_node", "__name:=" + name[1:],
+                                 "_scene:=soak_jam", "_scenes_dir:=" + SOURCE_DIR + "/scenes",
+                                 "_tolerance:=1e-300", "_max_iterations:=3000", "_on_fault:=pause",
+                                 "clock:=/long_jam_clock", "tf:=/long_jam_tf", "tf_static:=/long_jam_tf_static",
+                                 "diagnostics:=/long_jam_diagnostics", "joint_states:=/long_jam_joint_states"],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+        try:
+            rospy.wait_for_service(name + "/delete", timeout=15)
+            get = rospy.ServiceProxy(name + "/get_body_state", GetBodyState)
+            time.sleep(1.0)
+            before = get("ball_5")
+            start = time.monotonic()
+            deleted = rospy.ServiceProxy(name + "/delete", Delete)(["ball_5"])
+            delete_s = time.monotonic() - start
+            after, other = get("ball_5"), get("ball_6")
+        finally:
+            os.killpg(node.pid, signal.SIGINT)
+            try:
+                node.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                os.killpg(node.pid, signal.SIGKILL)
+        print("[ INFO ] ~delete during a long step of the jam: answered in %.3f s" % delete_s, flush=True)
+        self.assertEqual(before.message, "t = 0 s")  # 1 s after the start the first step was still running
+        self.assertTrue(deleted.success, deleted.message)
+        self.assertEqual(list(deleted.deleted), ["ball_5"])
+        self.assertLess(delete_s, 0.5)
+        self.assertFalse(after.success)  # gone from the snapshot
+        self.assertEqual(other.message, "t = 0 s")  # the cut step was undone: no time passed
 
     def test_6c_after_a_master_restart_the_node_registers_again_or_exits(self):
         # A master of its own on a free port, killed and started again; the node runs against it.

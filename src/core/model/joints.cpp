@@ -155,31 +155,32 @@ double JointDriveEffortAt(const Joint& joint, const JointDrive& drive, double q,
                                      drive.damping * (drive.velocity_target - qdot) + drive.gravity_effort);
 }
 
-std::vector<int> JointSubtree(const Model& model, int j) {
-  std::vector<char> below(model.bodies.size(), 0);  // joints list parents before children
-  below[model.joints[j].child] = 1;
-  for (size_t k = j + 1; k < model.joints.size(); ++k) {
-    const Joint& next = model.joints[k];
-    if (next.parent >= 0 && below[next.parent]) below[next.child] = 1;
+void SubtreeMassMoments(const Model& model, const State& state, std::vector<double>* mass,
+                        std::vector<Vec3>* first_moment_W) {
+  mass->resize(model.bodies.size());
+  first_moment_W->resize(model.bodies.size());
+  for (size_t b = 0; b < model.bodies.size(); ++b) {
+    (*mass)[b] = model.bodies[b].mass;
+    (*first_moment_W)[b] = model.bodies[b].mass * state.X_WB(model, static_cast<int>(b)).translation();
   }
-  std::vector<int> subtree;
-  for (size_t b = 0; b < below.size(); ++b) {
-    if (below[b]) subtree.push_back(static_cast<int>(b));
+  // Joints list parents before children: from the leaves up, each child's sums are final when added to its parent.
+  for (size_t k = model.joints.size(); k-- > 0;) {
+    const Joint& joint = model.joints[k];
+    if (joint.parent < 0) continue;
+    (*mass)[joint.parent] += (*mass)[joint.child];
+    (*first_moment_W)[joint.parent] += (*first_moment_W)[joint.child];
   }
-  return subtree;
 }
 
-double JointGravityEffort(const Model& model, const State& state, int j, const std::vector<int>& subtree) {
+double JointGravityEffort(const Model& model, const State& state, int j, const std::vector<double>& subtree_mass,
+                          const std::vector<Vec3>& subtree_first_moment_W) {
   const Joint& joint = model.joints[j];
   if (!joint.has_coordinate()) return 0.0;
   const Pose X_WC = state.X_WB(model, joint.child);
   const Vec3 a_W = X_WC.linear() * joint.R_CJ.col(0), p_WO = X_WC * joint.p_CJ;
-  Vec3 weight_W = Vec3::Zero(), moment_WO = Vec3::Zero();  // N, and N m about O
-  for (int b : subtree) {
-    const Vec3 f_W = model.bodies[b].mass * model.gravity_W;
-    weight_W += f_W;
-    moment_WO += (state.X_WB(model, b).translation() - p_WO).cross(f_W);
-  }
+  const double m = subtree_mass[joint.child];                                     // kg
+  const Vec3 weight_W = m * model.gravity_W;                                      // N
+  const Vec3 moment_WO = (subtree_first_moment_W[joint.child] - m * p_WO).cross(model.gravity_W);  // N m about O
   return joint.type == JointType::kPrismatic ? -a_W.dot(weight_W) : -a_W.dot(moment_WO);
 }
 

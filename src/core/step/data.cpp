@@ -39,7 +39,8 @@ Data::Data(const Model& model, PairSelection selection)
       contacts(layout.blocks().size()),
       joint_limit_effort(model.joints.size(), 0.0),
       joint_drive_effort(model.joints.size(), 0.0) {
-  for (size_t j = 0; j < model.joints.size(); ++j) joint_subtrees.push_back(JointSubtree(model, static_cast<int>(j)));
+  subtree_mass.reserve(model.bodies.size());
+  subtree_first_moment_W.reserve(model.bodies.size());
   for (size_t c = 0; c < contacts.size(); ++c) contacts[c].pair = layout.blocks()[c].pair;
 }
 
@@ -51,13 +52,18 @@ void Data::LayOut(const std::vector<int>& pairs_in_ncp, const Eigen::VectorXd* z
 }
 
 bool Data::LayOutDrives(const State& state) {
-  bool changed = false;
+  bool changed = false, compensated = false;
+  for (size_t j = 0; j < joint_drives.size(); ++j) {
+    driven[j] = JointDriveActive(joint_drives[j]) && model_->joints[j].has_coordinate();
+    changed = changed || driven[j] != layout.driven_joints()[j];
+    compensated = compensated || (driven[j] && joint_drives[j].gravity_compensation);
+  }
+  if (compensated) SubtreeMassMoments(*model_, state, &subtree_mass, &subtree_first_moment_W);
   for (size_t j = 0; j < joint_drives.size(); ++j) {
     JointDrive& drive = joint_drives[j];
-    driven[j] = JointDriveActive(drive) && model_->joints[j].has_coordinate();
-    changed = changed || driven[j] != layout.driven_joints()[j];
     drive.gravity_effort = driven[j] && drive.gravity_compensation
-                               ? JointGravityEffort(*model_, state, static_cast<int>(j), joint_subtrees[j])
+                               ? JointGravityEffort(*model_, state, static_cast<int>(j), subtree_mass,
+                                                    subtree_first_moment_W)
                                : 0.0;
   }
   if (!changed) return false;

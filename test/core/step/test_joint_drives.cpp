@@ -465,9 +465,14 @@ TEST(JointDrives, GravityFeedForwardHoldsAHorizontalArmWithoutSag) {
   const State start = State::Initial(model);
   // Closed form: the weights' moments about +y through each joint, 9.81 (1 x 0.25 + 0.5 x 0.75) and 9.81 (0.5 x 0.25);
   // the drive pushes back.
-  EXPECT_NEAR(JointGravityEffort(model, start, shoulder, JointSubtree(model, shoulder)), -9.81 * 0.625, 1e-12);
-  EXPECT_NEAR(JointGravityEffort(model, start, elbow, JointSubtree(model, elbow)), -9.81 * 0.125, 1e-12);
-  EXPECT_EQ(JointSubtree(model, shoulder), (std::vector<int>{model.FindBody("upper"), model.FindBody("fore")}));
+  std::vector<double> mass;
+  std::vector<Vec3> first_moment_W;
+  SubtreeMassMoments(model, start, &mass, &first_moment_W);
+  EXPECT_NEAR(JointGravityEffort(model, start, shoulder, mass, first_moment_W), -9.81 * 0.625, 1e-12);
+  EXPECT_NEAR(JointGravityEffort(model, start, elbow, mass, first_moment_W), -9.81 * 0.125, 1e-12);
+  EXPECT_DOUBLE_EQ(mass[model.FindBody("upper")], 1.5);  // kg: the upper link and the forearm below it
+  EXPECT_DOUBLE_EQ(mass[model.FindBody("fore")], 0.5);
+  EXPECT_TRUE(first_moment_W[model.FindBody("upper")].isApprox(Vec3(1.0 * 0.25 + 0.5 * 0.75, 0, 1.0 * 1.5)));
   for (Scheme scheme : {Scheme::kRattle, Scheme::kPaper}) {
     for (bool compensate : {false, true}) {
       SCOPED_TRACE(std::string(SchemeName(scheme)) + (compensate ? " with" : " without") + " gravity feed-forward");

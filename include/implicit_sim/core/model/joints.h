@@ -72,12 +72,16 @@ constexpr double kMaxJointDriveGain = 1e12;
 inline bool JointDriveActive(const JointDrive& drive) {
   return drive.stiffness != 0.0 || drive.damping != 0.0 || drive.gravity_compensation;
 }
-// The bodies of joint j's subtree: its child and every body below it through joints (ascending).
-std::vector<int> JointSubtree(const Model& model, int joint);
-// The effort (N m or N) that holds joint j's subtree (JointSubtree; other joints held) against gravity in `state`:
+// Per body b: the mass (kg) of b's subtree (b and every body below it through joints) and its first moment
+// sum_c m_c p_Wc (kg m) in `state`, in one pass from the leaves up (O(bodies + joints); no allocation once sized).
+void SubtreeMassMoments(const Model& model, const State& state, std::vector<double>* mass,
+                        std::vector<Vec3>* first_moment_W);
+// The effort (N m or N) that holds joint j's subtree (other joints held) against gravity in `state`:
 // -sum_b m_b g . dp_b/dq, dp_b/dq = a x (p_b - o) for a revolute or continuous joint with axis a through o, a for a
-// prismatic one; 0 for a fixed joint. A mimic follower below j is taken as held. No allocation.
-double JointGravityEffort(const Model& model, const State& state, int joint, const std::vector<int>& subtree);
+// prismatic one; 0 for a fixed joint. With M and S the subtree's mass and first moment (SubtreeMassMoments) this is
+// -a . ((S - M o) x g), or -M a . g. A mimic follower below j is taken as held. No allocation.
+double JointGravityEffort(const Model& model, const State& state, int joint, const std::vector<double>& subtree_mass,
+                          const std::vector<Vec3>& subtree_first_moment_W);
 // Whether `drive` is valid for `joint`: finite targets, gains in [0, kMaxJointDriveGain], and if active a joint with a
 // coordinate (never a fixed joint, nor a mimic joint: its leader is driven) and a position target within [lower, upper] (give or take kJointLimitRoundOff) for
 // a limited joint. Otherwise false,

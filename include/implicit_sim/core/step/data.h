@@ -120,7 +120,9 @@ class Data {
   // the paper's step, which damps it, and stays on it while at rest (time_stepper.cpp). Part of the warm start.
   std::vector<int> velocity_reversals;
   std::vector<char> driven;  // LayOutDrives' workspace: per model joint, whether its drive is active
-  std::vector<std::vector<int>> joint_subtrees;  // per model joint: JointSubtree, for the gravity feed-forward
+  // Per body, for the gravity feed-forward of the drives: its subtree's mass (kg) and first moment (kg m), SubtreeMassMoments.
+  std::vector<double> subtree_mass;
+  std::vector<Vec3> subtree_first_moment_W;
   // --- input: one PD drive per model joint (joints.h, JointDrive), all inactive as built; set them before Step, like
   // MuJoCo's mjData.ctrl. Step refuses invalid ones (CheckJointDrive). Turning drives on or off changes the layout of
   // z (LayOutDrives); the warm start is carried over. ---
