@@ -10,6 +10,7 @@
 
 #include "implicit_sim/core/geometry/support.h"
 #include "implicit_sim/core/model/urdf_loader.h"
+#include "implicit_sim/core/step/data.h"
 
 namespace implicit_sim {
 namespace {
@@ -48,6 +49,28 @@ TEST(PileScene, LayoutFollowsTheScenarioAndSpheresStartApart) {
     }
   }
   EXPECT_THROW(MakePileUrdf(0, PileShape::kSphere), std::invalid_argument);
+}
+
+// pile.launch documents n in [1, 4000] (spheres, ellipsoids) and [1, 2000] (brackets, tees): the largest pile of each
+// kind of part loads and gets its step workspace; one part more is refused by the generator with the range.
+TEST(PileScene, TheLargestDocumentedPilesLoadAndOneMorePartIsRefused) {
+  EXPECT_EQ(MaxPileSize(PileShape::kEllipsoid), 4000);
+  EXPECT_EQ(MaxPileSize(PileShape::kTee), 2000);
+  for (PileShape shape : {PileShape::kEllipsoid, PileShape::kTee}) {
+    SCOPED_TRACE(PileShapeName(shape));
+    const int n = MaxPileSize(shape);
+    const Model model = LoadSceneFromString(MakePileUrdf(n, shape), "pile");
+    EXPECT_EQ(model.num_moving(), n);
+    EXPECT_LE(static_cast<int64_t>(model.pairs.size()), Model::kMaxContactPairs);
+    const Data data(model);
+    EXPECT_EQ(data.X_WB.size(), model.bodies.size());
+    try {
+      MakePileUrdf(n + 1, shape);
+      ADD_FAILURE() << "accepted " << n + 1 << " parts";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(std::to_string(n)), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(PileScene, EllipsoidRowsAreSpreadToTheNearestNonOverlappingLayout) {
