@@ -429,6 +429,7 @@ class NodeContract(unittest.TestCase):
         scenes = tempfile.mkdtemp(prefix="implicit_sim_chain_")
         with open(os.path.join(scenes, "chain20k.urdf"), "w") as out:
             out.write(revolute_chain_urdf(20000))
+        shutil.copy(os.path.join(SOURCE_DIR, "scenes", "p3_sphere_on_two_spheres.urdf"), scenes)
         times, answers = {}, []
         for case in ("startup", "load_scene"):
             name = "/sigint_load_node"
@@ -442,7 +443,6 @@ class NodeContract(unittest.TestCase):
                                     stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
             try:
                 if case == "load_scene":
-                    shutil.copy(os.path.join(SOURCE_DIR, "scenes", scene + ".urdf"), scenes)
                     rospy.wait_for_service(name + "/load_scene", timeout=20)
                     proxy = rospy.ServiceProxy(name + "/load_scene", LoadScene)
 

@@ -120,7 +120,8 @@ class Data {
   // the paper's step, which damps it, and stays on it while at rest (time_stepper.cpp). Part of the warm start.
   std::vector<int> velocity_reversals;
   std::vector<char> driven;  // LayOutDrives' workspace: per model joint, whether its drive is active
-  // Per body, for the gravity feed-forward of the drives: its subtree's mass (kg) and first moment (kg m), SubtreeMassMoments.
+  // Per body, for the drives' gravity feed-forward: its subtree's mass (kg) and first moment (kg m),
+  // SubtreeMassMoments (reserved when built, so the warm step allocates nothing).
   std::vector<double> subtree_mass;
   std::vector<Vec3> subtree_first_moment_W;
   // --- input: one PD drive per model joint (joints.h, JointDrive), all inactive as built; set them before Step, like
