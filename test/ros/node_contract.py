@@ -87,6 +87,27 @@ def revolute_chain_urdf(n):
     return "".join(parts) + "</robot>\n"
 
 
+def start_side_node(name, scene, scenes_dir, params=(), stderr=subprocess.DEVNULL):
+    """A second node `name` (no leading /) on `scene`, in a session of its own. Its /clock, /tf, /tf_static,
+    /diagnostics and /joint_states are remapped to /<name>_<topic>: the contract's node keeps those topics."""
+    remaps = ["%s:=/%s_%s" % (topic, name, topic) for topic in ("clock", "tf", "tf_static", "diagnostics",
+                                                                "joint_states")]
+    return subprocess.Popen(["rosrun", "implicit_sim", "implicit_sim_node", "__name:=" + name, "_scene:=" + scene,
+                             "_scenes_dir:=" + scenes_dir] + list(params) + remaps,
+                            stdout=subprocess.DEVNULL, stderr=stderr, start_new_session=True)
+
+
+def stop_process(process):
+    """SIGINT to the process's group; SIGKILL if it is still there 20 s later."""
+    if process.poll() is None:
+        os.killpg(process.pid, signal.SIGINT)
+        try:
+            process.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+
+
 class Recorder:
     """Arrival wall times (time.monotonic) and messages of one topic."""
 
@@ -394,12 +415,8 @@ class NodeContract(unittest.TestCase):
         # Every Newton solve runs to its 3000 iterations (tolerance 1e-300), so one step of the P3 scene takes seconds.
         # Its own topics are remapped: the contract's node keeps /clock, /tf and /diagnostics.
         name = "/long_step_node"
-        node = subprocess.Popen(["rosrun", "implicit_sim", "implicit_sim_node", "__name:=" + name[1:],
-                                 "_scene:=p3_sphere_on_two_spheres", "_scenes_dir:=" + SOURCE_DIR + "/scenes",
-                                 "_tolerance:=1e-300", "_max_iterations:=3000", "_on_fault:=pause",
-                                 "clock:=/long_step_clock", "tf:=/long_step_tf", "tf_static:=/long_step_tf_static",
-                                 "diagnostics:=/long_step_diagnostics", "joint_states:=/long_step_joint_states"],
-                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+        node = start_side_node(name[1:], "p3_sphere_on_two_spheres", SOURCE_DIR + "/scenes",
+                               ["_tolerance:=1e-300", "_max_iterations:=3000", "_on_fault:=pause"])
         try:
             rospy.wait_for_service(name + "/pause", timeout=15)
             time.sleep(1.0)  # inside the first step
@@ -412,11 +429,7 @@ class NodeContract(unittest.TestCase):
             rospy.ServiceProxy(name + "/step", Step)(1)
             step_s = time.monotonic() - start
         finally:
-            os.killpg(node.pid, signal.SIGINT)
-            try:
-                node.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                os.killpg(node.pid, signal.SIGKILL)
+            stop_process(node)
         print("[ INFO ] ~pause during a long step: answered in %.3f s; the step alone takes %.2f s" % (pause_s, step_s),
               flush=True)
         self.assertEqual(state.message, "t = 0 s")  # the cut step was undone: no time passed
@@ -434,13 +447,7 @@ class NodeContract(unittest.TestCase):
         for case in ("startup", "load_scene"):
             name = "/sigint_load_node"
             scene = "chain20k" if case == "startup" else "p3_sphere_on_two_spheres"
-            node = subprocess.Popen(["rosrun", "implicit_sim", "implicit_sim_node", "__name:=" + name[1:],
-                                     "_scene:=" + scene, "_scenes_dir:=" + scenes, "_paused:=true",
-                                     "clock:=/sigint_load_clock",
-                                     "tf:=/sigint_load_tf", "tf_static:=/sigint_load_tf_static",
-                                     "diagnostics:=/sigint_load_diagnostics",
-                                     "joint_states:=/sigint_load_joint_states"],
-                                    stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
+            node = start_side_node(name[1:], scene, scenes, ["_paused:=true"], stderr=subprocess.PIPE)
             try:
                 if case == "load_scene":
                     rospy.wait_for_service(name + "/load_scene", timeout=20)
@@ -479,12 +486,8 @@ class NodeContract(unittest.TestCase):
         # The jam scene (the gripper pressed among 20 spheres) with every Newton solve run to 3000 iterations: ~delete
         # of a sphere the fingers press, 1 s into the first step, cuts it, and the world goes on without the sphere.
         name = "/long_jam_node"
-        node = subprocess.Popen(["rosrun", "implicit_sim", "implicit_sim_node", "__name:=" + name[1:],
-                                 "_scene:=soak_jam", "_scenes_dir:=" + SOURCE_DIR + "/scenes",
-                                 "_tolerance:=1e-300", "_max_iterations:=3000", "_on_fault:=pause",
-                                 "clock:=/long_jam_clock", "tf:=/long_jam_tf", "tf_static:=/long_jam_tf_static",
-                                 "diagnostics:=/long_jam_diagnostics", "joint_states:=/long_jam_joint_states"],
-                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+        node = start_side_node(name[1:], "soak_jam", SOURCE_DIR + "/scenes",
+                               ["_tolerance:=1e-300", "_max_iterations:=3000", "_on_fault:=pause"])
         try:
             rospy.wait_for_service(name + "/delete", timeout=15)
             get = rospy.ServiceProxy(name + "/get_body_state", GetBodyState)
@@ -495,11 +498,7 @@ class NodeContract(unittest.TestCase):
             delete_s = time.monotonic() - start
             after, other = get("ball_5"), get("ball_6")
         finally:
-            os.killpg(node.pid, signal.SIGINT)
-            try:
-                node.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                os.killpg(node.pid, signal.SIGKILL)
+            stop_process(node)
         print("[ INFO ] ~delete during a long step of the jam: answered in %.3f s" % delete_s, flush=True)
         self.assertEqual(before.message, "t = 0 s")  # 1 s after the start the first step was still running
         self.assertTrue(deleted.success, deleted.message)
@@ -526,15 +525,6 @@ class NodeContract(unittest.TestCase):
             except OSError:
                 return ""
 
-        def stop(process):
-            if process.poll() is None:
-                os.killpg(process.pid, signal.SIGINT)
-                try:
-                    process.wait(timeout=20)
-                except subprocess.TimeoutExpired:
-                    os.killpg(process.pid, signal.SIGKILL)
-                    process.wait()
-
         for policy in ("reregister", "exit"):
             port = free_port()
             uri = "http://127.0.0.1:%d/" % port
@@ -550,7 +540,7 @@ class NodeContract(unittest.TestCase):
                     time.sleep(0.1)
                 self.assertTrue(lookup(uri, "/master_loss_node/get_body_state"), policy)
                 time.sleep(1.0)  # running
-                stop(master)
+                stop_process(master)
                 time.sleep(2.0)  # the node's checks see no master
                 master = start_master(port)
                 deadline = time.monotonic() + 20
@@ -570,8 +560,8 @@ class NodeContract(unittest.TestCase):
                     self.assertEqual(code, 1)
                     self.assertIn("lost the ROS master", node.stderr.read().decode())
             finally:
-                stop(node)
-                stop(master)
+                stop_process(node)
+                stop_process(master)
 
 
 if __name__ == "__main__":
