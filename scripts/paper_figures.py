@@ -14,7 +14,7 @@ RATTLE step too where the two differ (Fig. 1(a), Fig. 6, the ellipsoid on an ell
   ellipsoid_on_ellipsoid.png   an ellipsoid toppling down a fixed ellipsoid (no closed-form distance): gap, energy
 Prints, per figure, the numbers it shows against the reference with PASS/FAIL, and exits 1 if a check fails.
 P1 runs 5 s (about 4 min, most of it the 1000-gon at h = 0.0005); --quick shortens Fig. 1(a) to 1 s and Fig. 1(b) to
-0.2 s (about 40 s in all) for tests."""
+0.1 s (about 40 s in all) for tests."""
 import argparse
 import csv
 import json
@@ -106,7 +106,7 @@ def figure_1(runner, out_dir, work, quick):
           order[-1] <= rattle_ratios["smooth"] + 1e-3)
 
     print("Fig. 1(b): the 1000-gon at four time steps and the smooth disc")
-    T = 0.2 if quick else 5.0
+    T = 0.1 if quick else 5.0
     fig, axis = plt.subplots(figsize=(8, 4.5))
     smooth, _ = run(runner, "p1_disc_rolling.urdf", T, 0.01, work)
     axis.plot(smooth["t"], smooth["energy.kinetic"], "k", label="smooth disc, h = 0.01")
