@@ -68,13 +68,16 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
       // condition number, which grows as 1/h; doc/method.md, pitfall 8.)
       // Our LU skips zeros (DenseLu); its condition estimate, which costs as much as the factorization on small
       // problems, runs only where the pivots span more than 1e8.
-      lu_dense_.Factorize(J_);
-      ++summary_->factorizations;
       ++summary_->solves;
-      if (lu_dense_.PivotRatio() > 1e-8 || lu_dense_.ConditionEstimate() > 1e-13) {
-        dz_ = -Phi_;
-        lu_dense_.Solve(&dz_);
-        return dz_.allFinite();
+      if (!dense_singular_) {
+        lu_dense_.Factorize(J_);
+        ++summary_->factorizations;
+        if (lu_dense_.PivotRatio() > 1e-8 || lu_dense_.ConditionEstimate() > 1e-13) {
+          dz_ = -Phi_;
+          lu_dense_.Solve(&dz_);
+          return dz_.allFinite();
+        }
+        dense_singular_ = true;  // the rest of this solve goes straight to Eigen's LU: its matrices share a pattern
       }
       // Singular in exact arithmetic (a flat face's free closest points, an unknown without a row): Eigen's blocked
       // LU leaves round-off where ours has exact zeros, and its estimate often passes such a J. Its direction is
@@ -173,6 +176,7 @@ void SemismoothNewton::BeginSolve(const NcpProblem& problem, const NewtonOptions
     condense_ = condensed_lu_.has_blocks();
   }
   history_count_ = history_next_ = 0;
+  dense_singular_ = false;
   if (options.trace) ++options.trace->solves;
 }
 

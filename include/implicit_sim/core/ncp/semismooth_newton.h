@@ -136,6 +136,7 @@ class SemismoothNewton {
   Eigen::VectorXd Phi_, Phi_trial_, z_trial_, rhs_, dz_;
   DenseLu lu_dense_;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_singular_;  // where lu_dense_ finds J singular (see Direction)
+  bool dense_singular_ = false;  // lu_dense_ found this solve's J singular
   Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod_;  // a singular dense J's minimum-norm direction
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
   SparseJacobian J_sparse_;
