@@ -36,14 +36,6 @@ void DenseLu::Factorize(const Eigen::MatrixXd& A) {
   }
 }
 
-double DenseLu::PivotRatio() const {
-  if (!finite_) return 0.0;
-  if (lu_.rows() == 0) return 1.0;
-  const auto pivots = lu_.diagonal().cwiseAbs();
-  const double largest = pivots.maxCoeff();
-  return largest > 0.0 ? pivots.minCoeff() / largest : 0.0;
-}
-
 double DenseLu::ConditionEstimate() {
   // Hager's estimate of |A^-1|_1 (Higham, Accuracy and Stability of Numerical Algorithms, Algorithm 15.4): at most
   // five pairs of solves with A and A^T, climbing to the column of A^-1 with the largest 1-norm.
