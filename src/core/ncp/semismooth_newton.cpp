@@ -12,8 +12,8 @@ void SemismoothNewton::Resize(int n) {
   if (Phi_.size() == n) return;
   if (!sparse_) {
     J_.resize(n, n);
-    lu_singular_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n);
     normal_.resize(n, n);
+    lu_dense_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n);
     cod_ = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(n, n);
     ldlt_ = Eigen::LDLT<Eigen::MatrixXd>(n);
   }
@@ -66,27 +66,11 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
     if (!least_squares) {
       // The Newton direction J dz = -Phi by LU with partial pivoting. (The LM normal equations alone square J's
       // condition number, which grows as 1/h; doc/method.md, pitfall 8.)
-      // Our LU skips zeros (DenseLu). Its condition estimate runs on every factorization: pivots within a few decades
-      // of each other do not make J well conditioned (the vendor arms' stiff drive rows).
-      ++summary_->solves;
-      if (!dense_singular_) {
-        lu_dense_.Factorize(J_);
-        ++summary_->factorizations;
-        if (lu_dense_.ConditionEstimate() > 1e-13) {
-          dz_ = -Phi_;
-          lu_dense_.Solve(&dz_);
-          return dz_.allFinite();
-        }
-        dense_singular_ = true;  // the rest of this solve goes straight to Eigen's LU: its matrices share a pattern
-      }
-      // Singular in exact arithmetic (a flat face's free closest points, an unknown without a row): Eigen's blocked
-      // LU leaves round-off where ours has exact zeros, and its estimate often passes such a J. Its direction is
-      // kept where it does (the grippers' box contacts take fewer cold restarts with it than with the minimum-norm
-      // one).
-      lu_singular_.compute(J_);
+      lu_dense_.compute(J_);
       ++summary_->factorizations;
-      if (lu_singular_.rcond() > 1e-13) {
-        dz_.noalias() = lu_singular_.solve(-Phi_);
+      ++summary_->solves;
+      if (lu_dense_.rcond() > 1e-13) {
+        dz_.noalias() = lu_dense_.solve(-Phi_);
         return dz_.allFinite();
       }
       // A (numerically) singular J, such as a planar body's line contact gives: its LU direction would be huge and
@@ -176,7 +160,6 @@ void SemismoothNewton::BeginSolve(const NcpProblem& problem, const NewtonOptions
     condense_ = condensed_lu_.has_blocks();
   }
   history_count_ = history_next_ = 0;
-  dense_singular_ = false;
   if (options.trace) ++options.trace->solves;
 }
 

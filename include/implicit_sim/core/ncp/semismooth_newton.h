@@ -26,7 +26,6 @@
 
 #include "implicit_sim/core/base/interrupt.h"
 #include "implicit_sim/core/ncp/condensed_lu.h"
-#include "implicit_sim/core/ncp/dense_lu.h"
 #include "implicit_sim/core/ncp/ncp_problem.h"
 #include "implicit_sim/core/ncp/ncp_summary.h"
 #include "implicit_sim/core/ncp/sparse_lu.h"
@@ -134,9 +133,7 @@ class SemismoothNewton {
   NcpSummary* summary_ = nullptr;  // of the current solve: evaluation counts
   Eigen::MatrixXd J_, normal_;
   Eigen::VectorXd Phi_, Phi_trial_, z_trial_, rhs_, dz_;
-  DenseLu lu_dense_;
-  Eigen::PartialPivLU<Eigen::MatrixXd> lu_singular_;  // where lu_dense_ finds J singular (see Direction)
-  bool dense_singular_ = false;  // lu_dense_ found this solve's J singular
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu_dense_;
   Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod_;  // a singular dense J's minimum-norm direction
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
   SparseJacobian J_sparse_;
