@@ -3,27 +3,24 @@
 
 Usage: scripts/validation_figure.py OUT.png --study RATIO:DIR[:LABEL] [--study ...]
 Each --study is an implicit_sim_batch output directory (its results.jsonl, classifier cylinder_faces) of a coin with
-thickness / diameter RATIO; studies with the same LABEL share a marker and a legend entry. Draws, against t/d: the quasi-static closed form t / sqrt(t^2 + d^2); each study's side
-share with its Wilson 95 % interval; and the crowd-sourced hand tosses recorded in doc/validation.md (second-hand,
-counts unknown, so without intervals)."""
+thickness / diameter RATIO; studies with the same LABEL share a marker and a legend entry. Draws, against t/d:
+the quasi-static closed form t / sqrt(t^2 + d^2); each study's side share with its Wilson 95 % interval; and the
+crowd-sourced hand tosses recorded in doc/validation.md (second-hand, counts unknown, so without intervals)."""
 import argparse
 import json
 import math
 import os
+from importlib.machinery import SourceFileLoader
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+# The Wilson interval of the batch report (scripts/implicit_sim_batch_report, a script without a .py suffix).
+wilson = SourceFileLoader("implicit_sim_batch_report", os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                                                                    "implicit_sim_batch_report")).load_module().wilson
 CROWD = [(0.707 / 2.0, 0.132), (1.154 / 2.0, 0.410)]  # (t/d, edge share): doc/validation.md, "A crowd experiment"
-
-
-def wilson(k, n, z=1.959964):
-    p = k / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return centre - half, centre + half
 
 
 def side_share(directory):
