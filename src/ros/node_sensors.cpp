@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <utility>
 
+#include <geometry_msgs/WrenchStamped.h>
 #include <sensor_msgs/Imu.h>
 
 #include "implicit_sim/ContactSensor.h"
@@ -24,6 +25,8 @@ void NodeSensors::SetWorld(const Model& model, double sim_time) {
       kept[key] = old->second;
     } else if (sensor.type == SensorType::kImu) {
       kept[key] = pnh_.advertise<sensor_msgs::Imu>("sensors/" + sensor.name, 10);
+    } else if (sensor.type == SensorType::kForceTorque) {
+      kept[key] = pnh_.advertise<geometry_msgs::WrenchStamped>("sensors/" + sensor.name, 10);
     } else {
       kept[key] = pnh_.advertise<implicit_sim::ContactSensor>("sensors/" + sensor.name, 10);
     }
@@ -37,7 +40,8 @@ void NodeSensors::SetWorld(const Model& model, double sim_time) {
 }
 
 void NodeSensors::Sample(const Model& model, const State& before, const State& after, double h,
-                         const std::vector<ContactResult>& contacts, double sim_time) {
+                         StepperOptions::Scheme scheme, const std::vector<ContactResult>& contacts,
+                         const Eigen::VectorXd& wrench_W, const Eigen::VectorXd& joint_efforts, double sim_time) {
   const ros::Time stamp = ros::Time().fromSec(sim_time);
   for (size_t s = 0; s < model.sensors.size(); ++s) {
     if (sim_time < next_time_[s]) continue;
@@ -55,6 +59,16 @@ void NodeSensors::Sample(const Model& model, const State& before, const State& a
       msg.orientation.z = reading.q_WS.z();
       msg.angular_velocity = conv::ToVectorMsg(reading.w_S);
       msg.linear_acceleration = conv::ToVectorMsg(reading.a_S);
+      by_sensor_[s]->publish(msg);
+    } else if (sensor.type == SensorType::kForceTorque) {
+      const bool efforts = joint_efforts.size() == static_cast<int>(model.joints.size());
+      const ForceTorqueReading reading = ReadForceTorque(model, sensor, before, after, h, scheme, contacts, &wrench_W,
+                                                         efforts ? &joint_efforts : nullptr, &in_subtree_);
+      geometry_msgs::WrenchStamped msg;
+      msg.header.stamp = stamp;
+      msg.header.frame_id = sensor.link;
+      msg.wrench.force = conv::ToVectorMsg(reading.force_L);
+      msg.wrench.torque = conv::ToVectorMsg(reading.torque_L);
       by_sensor_[s]->publish(msg);
     } else {
       ReadContactSensor(model, after, sensor, contacts, contact_threshold_, &contact_reading_);

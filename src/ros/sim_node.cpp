@@ -186,7 +186,10 @@ bool SimNode::StepOnce(double rtf, bool paced) {
   std::string failure;
   if (report.advanced) {
     stepped_ = true;
-    sensors_->Sample(*w.model, state_before_, w.state, options_.h, w.data->contacts, SimTime());
+    const bool rattle = options_.scheme == StepperOptions::Scheme::kRattle && report.paper_fallbacks == 0;
+    sensors_->Sample(*w.model, state_before_, w.state, options_.h,
+                     rattle ? StepperOptions::Scheme::kRattle : StepperOptions::Scheme::kPaper, w.data->contacts,
+                     w.wrench_W, w.joint_efforts, SimTime());
   } else {
     // Step left the last good state in place (it never publishes NaN): warn once, then pause or reset.
     failure = std::string(StepFaultName(report.fault)) + (report.fault_detail.empty() ? "" : ": ") +

@@ -14,6 +14,7 @@
   with the ground) changing nothing;
 - a spawned ball with a contact sensor and an IMU (<implicit_sim><sensor>) resting on the ground publishes on
   ~sensors/<prefix><name>: its weight through the contact sensor, +g upwards from the IMU, at the sensors' rates;
+  a spawned pendulum hanging at rest reads its weight and no moment through its pivot's force-torque sensor;
 - the Panda as published spawns beside the UR5, and both, held by their drives with the gravity feed-forward
   (~drive_gravity_compensation, set by node_world.test), run 5 s at real time with every step converged and every
   joint within 1e-4 rad of its target."""
@@ -28,7 +29,7 @@ import xmlrpc.client
 import rosgraph
 import rospy
 import rostest
-from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
+from geometry_msgs.msg import Point, Pose, Quaternion, Vector3, WrenchStamped
 from implicit_sim.msg import BodyStates, ContactSensor, JointCommand, StepStats
 from implicit_sim.scene import Scene, Shape
 from implicit_sim.srv import Delete, GetBodyState, LoadScene, SetJointPositions, Spawn
@@ -254,7 +255,7 @@ class NodeWorld(unittest.TestCase):
             self.assertEqual(self.joint_positions(), q)
         self.assertTrue(call("unpause", Trigger).success)
 
-    def test_7_a_spawned_balls_contact_sensor_and_imu_read_its_weight_and_gravity(self):
+    def test_7_a_spawned_balls_contact_sensor_and_imu_and_a_pendulums_force_torque_sensor_read_their_weight(self):
         ball = """<robot name="sensed"><implicit_sim><sensor name="bumper" type="contact" link="ball" rate="20"/>
           <sensor name="imu" type="imu" link="ball" rate="50"/></implicit_sim><link name="world"/>
           <link name="ball"><inertial><mass value="1"/><inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0"
@@ -289,6 +290,22 @@ class NodeWorld(unittest.TestCase):
             self.assertGreater(len(gaps), 5, name)
             self.assertAlmostEqual(statistics.median(gaps), 1.0 / rate, delta=0.011, msg=name)
         self.assertTrue(call("delete", Delete, ["s_ball"]).success)
+        # A force-torque sensor on a spawned pendulum's pivot (1 kg, hanging at rest): its weight, up, no moment.
+        hanger = """<robot name="hanger"><implicit_sim><sensor name="ft" type="force_torque" joint="pivot" rate="50"/>
+          </implicit_sim><link name="world"/><link name="arm"><inertial><origin xyz="0 0 -0.3"/><mass value="1"/>
+          <inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial><collision><origin
+          xyz="0 0 -0.3"/><geometry><sphere radius="0.02"/></geometry></collision></link><joint name="pivot"
+          type="continuous"><parent link="world"/><child link="arm"/><axis xyz="0 1 0"/></joint></robot>"""
+        res = call("spawn", Spawn, urdf=hanger, prefix="h_", pose=pose(1.0, -1.0, 2.0))
+        self.assertTrue(res.success, res.message)
+        time.sleep(0.5)
+        wrench = rospy.wait_for_message(NODE + "/sensors/h_ft", WrenchStamped, timeout=10)
+        self.assertEqual(wrench.header.frame_id, "h_arm")
+        self.assertAlmostEqual(wrench.wrench.force.z, 9.81, delta=1e-6)
+        for value in (wrench.wrench.force.x, wrench.wrench.force.y, wrench.wrench.torque.x, wrench.wrench.torque.y,
+                      wrench.wrench.torque.z):
+            self.assertAlmostEqual(value, 0.0, delta=1e-6)
+        self.assertTrue(call("delete", Delete, ["h_arm"]).success)
 
 
     def test_8_vendor_arms_held_by_their_drives_run_at_real_time(self):

@@ -282,6 +282,7 @@ void RenameAll(XMLElement* robot, const std::string& prefix) {
     } else if (tag == "sensor") {
       Rename(e, "name", prefix, false);
       Rename(e, "link", prefix, true);
+      Rename(e, "joint", prefix, false);
     } else {
       Fail(std::string(kAdd) + "addition <implicit_sim>: unknown element <" + tag +
            "> (allowed: friction, body, joint, self_collide, disable_collisions, sensor)");
@@ -396,7 +397,7 @@ std::vector<std::string> RemoveSubtrees(XMLElement* robot, const std::set<std::s
     const std::string tag = e->Name();
     if (Names(e, "link1", links) || Names(e, "link2", links) ||
         ((tag == "body" || tag == "self_collide" || tag == "sensor") && Names(e, "link", links)) ||
-        (tag == "joint" && Names(e, "name", joints))) {
+        (tag == "joint" && Names(e, "name", joints)) || (tag == "sensor" && Names(e, "joint", joints))) {
       doomed.push_back(e);
     }
   }

@@ -42,7 +42,14 @@ bool Model::Excluded(int i, int j) const {
   return InOneSelfCollisionGroup(i, j) || std::binary_search(excluded_pairs.begin(), excluded_pairs.end(), std::make_pair(std::min(i, j), std::max(i, j)));
 }
 
-const char* SensorTypeName(SensorType type) { return type == SensorType::kImu ? "imu" : "contact"; }
+const char* SensorTypeName(SensorType type) {
+  switch (type) {
+    case SensorType::kImu: return "imu";
+    case SensorType::kForceTorque: return "force_torque";
+    case SensorType::kContact: break;
+  }
+  return "contact";
+}
 
 const char* JointTypeName(JointType type) {
   switch (type) {

@@ -317,12 +317,12 @@ FrictionParams ReadFriction(const tinyxml2::XMLElement* e, const std::string& wh
   return f;
 }
 
-// <implicit_sim><sensor name type link [rate]/>: a contact sensor on a link with a body, an IMU on any link with a
-// body or a frame link; names unique.
+// <implicit_sim><sensor name type link|joint [rate]/>: a contact sensor on a link with a body, an IMU on any link with
+// a body or a frame link, a force-torque sensor on a joint (its child link's); names unique.
 Sensor ReadSensor(const tinyxml2::XMLElement* e, const Model& model) {
   const char* name = e->Attribute("name");
   const std::string where = "<implicit_sim><sensor name='" + std::string(name ? name : "") + "'>";
-  CheckAttributes(e, {"name", "type", "link", "rate"}, where);
+  CheckAttributes(e, {"name", "type", "link", "joint", "rate"}, where);
   Sensor sensor;
   if (!name || !*name) Fail("<implicit_sim><sensor>: attribute 'name' must be a non-empty name");
   sensor.name = name;
@@ -331,10 +331,26 @@ Sensor ReadSensor(const tinyxml2::XMLElement* e, const Model& model) {
   }
   const char* type = e->Attribute("type");
   const std::string type_text = type ? type : "";
-  if (type_text != "contact" && type_text != "imu") {
-    Fail(where + ": attribute 'type' = '" + type_text + "' must be contact or imu");
+  if (type_text != "contact" && type_text != "imu" && type_text != "force_torque") {
+    Fail(where + ": attribute 'type' = '" + type_text + "' must be contact, imu or force_torque");
   }
-  sensor.type = type_text == "imu" ? SensorType::kImu : SensorType::kContact;
+  sensor.type = type_text == "imu"            ? SensorType::kImu
+                : type_text == "force_torque" ? SensorType::kForceTorque
+                                              : SensorType::kContact;
+  sensor.rate_hz = ReadScalar(e, "rate", where, 0.0, 1000.0, true, sensor.rate_hz, false);
+  if (sensor.type == SensorType::kForceTorque) {
+    if (e->Attribute("link")) Fail(where + ": a force_torque sensor takes attribute 'joint', not 'link'");
+    const char* joint = e->Attribute("joint");
+    sensor.joint = model.FindJoint(joint ? joint : "");
+    if (sensor.joint < 0) {
+      Fail(where + ": attribute 'joint' = '" + std::string(joint ? joint : "") +
+           "' must name a revolute, continuous, prismatic or fixed joint of the scene whose child link has a body");
+    }
+    sensor.body = model.joints[sensor.joint].child;
+    sensor.link = model.bodies[sensor.body].name;
+    return sensor;
+  }
+  if (e->Attribute("joint")) Fail(where + ": attribute 'joint' is only for a force_torque sensor");
   const char* link = e->Attribute("link");
   sensor.link = link ? link : "";
   sensor.body = model.FindBody(sensor.link);
@@ -349,7 +365,6 @@ Sensor ReadSensor(const tinyxml2::XMLElement* e, const Model& model) {
     Fail(where + ": attribute 'link' must name a link of the scene with a body" +
          (sensor.type == SensorType::kImu ? std::string(" or a frame link on one") : std::string()));
   }
-  sensor.rate_hz = ReadScalar(e, "rate", where, 0.0, 1000.0, true, sensor.rate_hz, false);
   return sensor;
 }
 
@@ -613,10 +628,8 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
         if (b < 0) Fail("<implicit_sim><body>: attribute 'link' must name a link of the scene");
         if (model.bodies[b].is_fixed) Fail("<implicit_sim><body link='" + std::string(link) + "'>: the link is fixed");
         ReadBodySettings(e, &model.bodies[b]);
-      } else if (tag == "sensor") {
-        model.sensors.push_back(ReadSensor(e, model));
-      } else if (tag != "joint" && tag != "self_collide" && tag != "disable_collisions") {
-        // <joint>: ReadJointStarts; <self_collide>, <disable_collisions>: ExcludeSelfCollisions
+      } else if (tag != "joint" && tag != "self_collide" && tag != "disable_collisions" && tag != "sensor") {
+        // <joint>: ReadJointStarts; <self_collide>, <disable_collisions>: ExcludeSelfCollisions; <sensor>: below
         Fail("<implicit_sim>: unknown element <" + tag +
              "> (allowed: friction, body, joint, self_collide, disable_collisions, sensor)");
       }
@@ -635,6 +648,10 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
     }
     return default_friction;
   }, options.interrupt);
+  // Sensors once the joints are built and indexed (a force-torque sensor names a joint).
+  for (auto* e = sim ? sim->FirstChildElement("sensor") : nullptr; e; e = e->NextSiblingElement("sensor")) {
+    model.sensors.push_back(ReadSensor(e, model));
+  }
   if (model.moving_bodies.empty()) Fail("scene '" + scene_name + "': no moving body (use a 'floating' joint)");
   const std::string self_overlap = SelfOverlapNote(model);
   if (!self_overlap.empty()) notes.Add("self_overlap", self_overlap);

@@ -1,5 +1,7 @@
 #include "implicit_sim/core/step/sensors.h"
 
+#include "implicit_sim/core/model/joints.h"
+
 namespace implicit_sim {
 namespace {
 
@@ -47,6 +49,69 @@ ImuReading ReadImu(const Model& model, const Sensor& sensor, const State& before
   reading.q_WS = Eigen::Quaterniond(X_WS.linear()).normalized();
   reading.w_S = R_SW * w_W;
   reading.a_S = R_SW * ((v_after - v_before) / h - model.gravity_W);
+  return reading;
+}
+
+ForceTorqueReading ReadForceTorque(const Model& model, const Sensor& sensor, const State& before, const State& after,
+                                   double h, StepperOptions::Scheme scheme,
+                                   const std::vector<ContactResult>& contacts,
+                                   const Eigen::VectorXd* external_wrench_W, const Eigen::VectorXd* joint_efforts,
+                                   std::vector<char>* in_subtree) {
+  const Joint& joint = model.joints[sensor.joint];
+  in_subtree->assign(model.bodies.size(), 0);
+  (*in_subtree)[joint.child] = 1;
+  for (const Joint& other : model.joints) {  // parents before children
+    if (other.parent >= 0 && (*in_subtree)[other.parent]) (*in_subtree)[other.child] = 1;
+  }
+  const Pose X_WL = before.X_WL(model, sensor.body);
+  const Vec3 p_WL = X_WL.translation();
+  Vec3 force_W = Vec3::Zero(), moment_W = Vec3::Zero();  // on the subtree, about p_WL
+  // Each body's Newton-Euler residual over the step: the joint forces on it.
+  for (int k = 0; k < model.num_moving(); ++k) {
+    const int b = model.moving_bodies[k];
+    if (!(*in_subtree)[b]) continue;
+    const Body& body = model.bodies[b];
+    const Mat3 R0 = before.X_WB(model, b).linear(), R1 = after.X_WB(model, b).linear();
+    const Vec3 L0 = R0 * body.I_B * R0.transpose() * before.w_WB(k);
+    const Vec3 L1 = R1 * body.I_B * R1.transpose() * after.w_WB(k);
+    Vec3 f = body.mass * (after.v_WB(k) - before.v_WB(k)) / h - body.mass * model.gravity_W - body.f_applied_W;
+    Vec3 tau = (L1 - L0) / h - body.tau_applied_W;
+    if (external_wrench_W) {
+      f -= external_wrench_W->segment<3>(Model::v_offset(k));
+      tau -= external_wrench_W->segment<3>(Model::v_offset(k) + 3);
+    }
+    // The paper's step applies joint forces at the start-of-step centres of mass (SHAKE); RATTLE half there, half at
+    // the end (its velocity stage).
+    const Vec3 p_WB0 = before.X_WB(model, b).translation(), p_WB1 = after.X_WB(model, b).translation();
+    const Vec3 p_WB = scheme == StepperOptions::Scheme::kRattle ? Vec3(0.5 * (p_WB0 + p_WB1)) : p_WB0;
+    moment_W += (p_WB - p_WL).cross(f) + tau;
+    force_W += f;
+  }
+  // Less the contacts' forces and moments on subtree bodies (a contact inside the subtree cancels).
+  for (const ContactResult& contact : contacts) {
+    if (contact.pair < 0) continue;
+    const ContactPair& pair = model.pairs[contact.pair];
+    for (const int side : {1, 2}) {
+      const int b = side == 1 ? pair.body1 : pair.body2;
+      if (b < 0 || !(*in_subtree)[b]) continue;
+      const double sign = side == 1 ? 1.0 : -1.0;
+      const Vec3 f_W = sign * (contact.normal_force * contact.n_W + contact.friction_force_W);
+      const Vec3 p_WC = side == 1 ? contact.p_WA1 : contact.p_WA2;
+      force_W -= f_W;
+      moment_W -= (p_WC - p_WL).cross(f_W) + sign * (contact.torsional_moment * contact.n_W + contact.rolling_moment_W);
+    }
+  }
+  // Plus the joint's own commanded effort along its position gradient at the start (AddJointEffortWrench's).
+  if (joint_efforts && joint.has_coordinate() && (*joint_efforts)[sensor.joint] != 0.0) {
+    JointGradient g;
+    JointPosition(joint, ParentPose(model, before, joint), before.X_WB(model, joint.child), &g);
+    const double effort = ClampJointEffort(joint, (*joint_efforts)[sensor.joint]);
+    force_W += effort * g.dp_C;
+    moment_W += (before.X_WB(model, joint.child).translation() - p_WL).cross(effort * g.dp_C) + effort * g.dth_C;
+  }
+  ForceTorqueReading reading;
+  reading.force_L = X_WL.linear().transpose() * force_W;
+  reading.torque_L = X_WL.linear().transpose() * moment_W;
   return reading;
 }
 

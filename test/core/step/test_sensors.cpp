@@ -110,7 +110,7 @@ TEST(Sensors, AnImuOnAFrameLinkOfASpinningBodyReadsTheCentripetalAcceleration) {
 
 TEST(Sensors, BadDeclarationsAreRefusedNamingTheSensorAndSpawnPrefixesThem) {
   const std::pair<const char*, const char*> cases[] = {
-      {"<sensor name='s' type='sonar' link='ball'/>", "attribute 'type' = 'sonar' must be contact or imu"},
+      {"<sensor name='s' type='sonar' link='ball'/>", "attribute 'type' = 'sonar' must be contact, imu or force_torque"},
       {"<sensor type='imu' link='ball'/>", "attribute 'name' must be a non-empty name"},
       {"<sensor name='s' type='imu' link='hand'/>", "<implicit_sim><sensor name='s'>: attribute 'link' must name"},
       {"<sensor name='s' type='contact' link='imu_link'/>", "must name a link of the scene with a body"},

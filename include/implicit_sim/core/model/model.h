@@ -110,16 +110,19 @@ struct FrameLink {
   Pose X_LF = Pose::Identity();     // the frame F in the body's link frame L
 };
 
-// A sensor declared in the scene (<implicit_sim><sensor name type link rate/>, doc/scenes.md#sensors), read after each
-// step (step/sensors.h): a contact sensor reports the contacts touching its link (as Gazebo's bumper), an IMU the
-// orientation, angular velocity and specific force of its link's frame.
-enum class SensorType { kContact, kImu };
-const char* SensorTypeName(SensorType type);  // "contact", "imu"
+// A sensor declared in the scene (<implicit_sim><sensor name type link|joint rate/>, doc/scenes.md#sensors), read
+// after each step (step/sensors.h): a contact sensor reports the contacts touching its link (as Gazebo's bumper), an
+// IMU the orientation, angular velocity and specific force of its link's frame, a force-torque sensor the wrench its
+// joint carries into its child link.
+enum class SensorType { kContact, kImu, kForceTorque };
+const char* SensorTypeName(SensorType type);  // "contact", "imu", "force_torque"
 struct Sensor {
   std::string name;
   SensorType type = SensorType::kContact;
-  std::string link;                 // the URDF link it sits on (a body's, or a frame link's for an IMU)
+  std::string link;                 // the URDF link it sits on (a body's, or a frame link's for an IMU; a force-torque
+                                    // sensor's joint's child link)
   int body = -1;                    // the body that carries that link
+  int joint = -1;                   // a force-torque sensor's joint (index into Model::joints); -1 otherwise
   Pose X_LS = Pose::Identity();     // the sensor frame S (the link's frame) in the body's link frame L
   double rate_hz = 50.0;            // samples per second of simulation time, (0, 1000]
 };
