@@ -135,5 +135,30 @@ inline const char* kJointedRobotUrdf = R"(<?xml version="1.0"?>
 
 inline Model JointedRobot() { return LoadSceneFromString(kJointedRobotUrdf, "jointed_robot"); }
 
+// A puck on a planar joint (normal off the principal directions, origin offset) to an arm that swings on a continuous
+// joint from the world: the planar rows with both bodies moving.
+inline const char* kPlanarJointRobotUrdf = R"(<?xml version="1.0"?>
+<robot name="planar_robot">
+  <implicit_sim gravity="0.3 -0.2 -9.81"><joint name="swing" position="0.4" velocity="0.8"/></implicit_sim>
+  <link name="world"/>
+  <link name="arm">
+    <inertial><origin xyz="0.2 0 0" rpy="0.1 0.2 0"/><mass value="1.5"/>
+      <inertia ixx="0.01" ixy="0.001" ixz="0" iyy="0.02" iyz="0" izz="0.02"/></inertial>
+    <collision><origin xyz="0.2 0 0"/><geometry><box size="0.4 0.05 0.05"/></geometry></collision>
+  </link>
+  <joint name="swing" type="continuous"><parent link="world"/><child link="arm"/>
+    <origin xyz="0 0 1" rpy="0.1 0 0.2"/><axis xyz="0.1 1 0.1"/></joint>
+  <link name="puck">
+    <inertial><origin xyz="0.01 0.02 0" rpy="0 0.1 0.3"/><mass value="0.4"/>
+      <inertia ixx="0.001" ixy="0" ixz="0.0001" iyy="0.0012" iyz="0" izz="0.002"/></inertial>
+    <collision><geometry><cylinder radius="0.05" length="0.02"/></geometry></collision>
+  </link>
+  <joint name="glide" type="planar"><parent link="arm"/><child link="puck"/>
+    <origin xyz="0.5 0.1 0" rpy="0.3 0 0"/><axis xyz="0.2 0.1 1"/></joint>
+</robot>
+)";
+
+inline Model PlanarJointRobot() { return LoadSceneFromString(kPlanarJointRobotUrdf, "planar_robot"); }
+
 }  // namespace test_models
 }  // namespace implicit_sim

@@ -457,7 +457,8 @@ std::string RobotDescriptionOf(const std::string& scene_urdf) {
   std::set<std::string> free_links;
   for (XMLElement* joint : ChildrenNamed(robot, "joint")) {
     const char* type = joint->Attribute("type");
-    if (type && std::string(type) == "floating" && JointLink(joint, "parent") == "world") {
+    const std::string kind = type ? type : "";
+    if ((kind == "floating" && JointLink(joint, "parent") == "world") || kind == "planar") {
       free_links.insert(JointLink(joint, "child"));
     }
   }

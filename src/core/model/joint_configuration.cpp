@@ -19,7 +19,7 @@ bool CheckRequest(const Model& model, int j, double q, std::string* error) {
   const Joint& joint = model.joints[j];
   const std::string where = "joint '" + joint.name + "'";
   if (!joint.has_coordinate()) {
-    *error = where + " is fixed: it has no position to set";
+    *error = where + " is " + JointTypeName(joint.type) + ": it has no position to set";
   } else if (joint.mimics()) {
     *error = where + " mimics '" + model.joints[joint.mimic_leader].name + "': set that joint instead";
   } else if (!std::isfinite(q)) {
@@ -82,7 +82,12 @@ bool SetJointPositions(const Model& model, const std::map<int, double>& position
       if (!pending[j]) continue;
       const Joint& joint = model.joints[j];
       if (joint.mimics()) target[j] = joint.mimic_multiplier * target[joint.mimic_leader] + joint.mimic_offset;
-      SetPose(model, joint.child, ChildPoseAtPosition(joint, ParentPose(model, next, joint), target[j]), &next);
+      // A planar joint has no coordinate: its child keeps its pose relative to the parent.
+      const Pose X_WC = joint.type == JointType::kPlanar
+                            ? Pose(ParentPose(model, next, joint) * ParentPose(model, *state, joint).inverse() *
+                                   state->X_WB(model, joint.child))
+                            : ChildPoseAtPosition(joint, ParentPose(model, next, joint), target[j]);
+      SetPose(model, joint.child, X_WC, &next);
       pending[j] = false;
       for (int k = 0; k < n; ++k) pending[k] = pending[k] || model.joints[k].parent == joint.child;
       changed = true;

@@ -38,9 +38,14 @@ double AngularRow(const Joint& joint, int i, int j, const Pose& X_WP, const Pose
 
 }  // namespace
 
-bool IsLinearEquality(const Joint& joint, int i) { return i < (joint.type == JointType::kPrismatic ? 2 : 3); }
+bool IsLinearEquality(const Joint& joint, int i) {
+  return i < (joint.type == JointType::kPrismatic ? 2 : joint.type == JointType::kPlanar ? 1 : 3);
+}
 
 double JointEquality(const Joint& joint, int i, const Pose& X_WP, const Pose& X_WC, JointGradient* gradient) {
+  if (joint.type == JointType::kPlanar) {  // the origin's offset along a; a . b1 and a . b2 (the child turns about a)
+    return i == 0 ? LinearRow(joint, 0, X_WP, X_WC, gradient) : AngularRow(joint, 0, i, X_WP, X_WC, gradient);
+  }
   const bool prismatic = joint.type == JointType::kPrismatic;
   if (IsLinearEquality(joint, i)) return LinearRow(joint, prismatic ? i + 1 : i, X_WP, X_WC, gradient);
   const int k = i - (prismatic ? 2 : 3);  // 0: (a, b1), 1: (a, b2), 2: (b1, b2)
@@ -50,6 +55,7 @@ double JointEquality(const Joint& joint, int i, const Pose& X_WP, const Pose& X_
 double JointPosition(const Joint& joint, const Pose& X_WP, const Pose& X_WC, JointGradient* gradient) {
   switch (joint.type) {
     case JointType::kFixed:
+    case JointType::kPlanar:
       if (gradient) *gradient = JointGradient();
       return 0.0;
     case JointType::kPrismatic:

@@ -57,6 +57,7 @@ const char* JointTypeName(JointType type) {
     case JointType::kRevolute: return "revolute";
     case JointType::kContinuous: return "continuous";
     case JointType::kPrismatic: return "prismatic";
+    case JointType::kPlanar: return "planar";
   }
   return "unknown";
 }

@@ -64,9 +64,10 @@ int Depth(const urdf::Link& link, std::unordered_map<const urdf::Link*, int>* kn
 void CheckJointElement(const tinyxml2::XMLElement* j, const std::string& where, LoadNotes* notes) {
   const char* type_text = j->Attribute("type");
   const std::string type = type_text ? type_text : "";
-  static const std::vector<std::string> kTypes = {"floating", "fixed", "revolute", "continuous", "prismatic"};
+  static const std::vector<std::string> kTypes = {"floating", "fixed", "revolute", "continuous", "prismatic", "planar"};
   if (std::find(kTypes.begin(), kTypes.end(), type) == kTypes.end()) {
-    Fail(where + ": type '" + type + "' is not supported (allowed: floating, fixed, revolute, continuous, prismatic)");
+    Fail(where + ": type '" + type +
+         "' is not supported (allowed: floating, fixed, revolute, continuous, prismatic, planar)");
   }
   if (const tinyxml2::XMLElement* mimic = j->FirstChildElement("mimic")) {
     const std::string at = where + " <mimic>";
@@ -259,7 +260,12 @@ void ReadJointParameters(const urdf::Joint& u, const JointStarts& starts, Joint*
                                       "] rad) turn without limit rows: within one turn neither limit is reached");
     }
   }
-  if (u.dynamics) {
+  if (u.dynamics && u.type == urdf::Joint::PLANAR) {
+    if (u.dynamics->damping != 0.0 || u.dynamics->friction != 0.0) {
+      notes->Add("planar_dynamics", "implicit_sim: <dynamics> of planar joints is ignored (the first: " + where +
+                                        "): a planar joint has no coordinate to damp or rub");
+    }
+  } else if (u.dynamics) {
     joint->damping = u.dynamics->damping;
     joint->friction = u.dynamics->friction;
     if (!(joint->damping >= 0.0 && joint->damping <= 1e9)) {
@@ -366,6 +372,7 @@ void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, co
     joint.type = u->type == urdf::Joint::FIXED       ? JointType::kFixed
                  : u->type == urdf::Joint::REVOLUTE  ? JointType::kRevolute
                  : u->type == urdf::Joint::PRISMATIC ? JointType::kPrismatic
+                 : u->type == urdf::Joint::PLANAR    ? JointType::kPlanar
                                                      : JointType::kContinuous;
     Pose X_AL;  // the URDF parent's link frame in the link frame A of the body it belongs to
     const std::string parent_link = NearestBodyLink(urdf, *model, u->parent_link_name, &X_AL);

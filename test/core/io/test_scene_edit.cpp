@@ -21,6 +21,7 @@
 #include "implicit_sim/core/model/urdf_loader.h"
 #include "io/scene_xml.h"
 #include "scenario_runner.h"
+#include "test_models.h"
 
 namespace implicit_sim {
 namespace {
@@ -451,6 +452,9 @@ TEST(SceneEdit, RobotDescriptionHasNoFreeBodiesAndNoExtension) {
 
   EXPECT_EQ(UrdfdomLinks(RobotDescriptionOf(ReadScene("p3_sphere_on_two_spheres.urdf"))),
             (std::vector<std::string>{"sphere_a", "sphere_b", "world"}));
+  // A planar joint's subtree goes too (robot_state_publisher's KDL would make the joint fixed).
+  EXPECT_EQ(UrdfdomLinks(RobotDescriptionOf(test_models::kPlanarJointRobotUrdf)),
+            (std::vector<std::string>{"arm", "world"}));
   // A floating robot goes whole; only `world` remains, still a URDF urdfdom reads.
   SceneAddition a;
   a.urdf = kArm;

@@ -220,6 +220,16 @@ TEST(StepProblemJacobian, JointsOfEveryTypeWithLimitsFrictionAndDamping) {
   ExpectJacobianMatchesFiniteDifferences(test_models::JointedRobot(), 9, true);
 }
 
+// The planar joint's three equalities (joints.h) with both of its bodies moving, in every stage, dense and sparse.
+TEST(StepProblemJacobian, PlanarJointInEveryStage) {
+  for (const bool sparse : {false, true}) {
+    for (const Stage stage : {Stage::kPaper, Stage::kRattlePosition, Stage::kRattleVelocity}) {
+      ExpectJacobianMatchesFiniteDifferences(test_models::PlanarJointRobot(), 60 + static_cast<unsigned>(stage) * 2 + sparse,
+                                             sparse, false, 0.0, stage);
+    }
+  }
+}
+
 // Projected multipliers (the retry ladder's rung 1b): the friction rows' slip speed max(sigma, 0), whose derivative
 // is 0 where the random point has sigma < 0.
 // Drive rows (rows/drive_rows.h) on the revolute, prismatic and continuous joints of the jointed robot, in every stage,

@@ -95,8 +95,8 @@ std::string RemoveFromScene(const std::string& scene_urdf, const std::vector<std
                             std::vector<std::string>* removed_links);
 
 // The scene as robot_state_publisher and rviz's RobotModel should see it: the subtrees on `floating` joints to world
-// removed (the simulator publishes those bodies' tf itself; robot_state_publisher would treat a floating joint as
-// fixed and publish a wrong static transform) and the <implicit_sim> element dropped. Jointed robots and static links
+// and on `planar` joints removed (the simulator publishes those bodies' tf itself; robot_state_publisher would treat
+// either joint as fixed and publish a wrong static transform) and the <implicit_sim> element dropped. Jointed robots and static links
 // stay. The result is a valid URDF (urdfdom parses it) even when only `world` and static links remain. Throws
 // std::invalid_argument when the scene is not a URDF robot.
 std::string RobotDescriptionOf(const std::string& scene_urdf);

@@ -46,9 +46,11 @@ struct Body {
 };
 
 // A URDF joint between two bodies: a bilateral constraint inside the step NCP (joints.h has the rows). The joint frame
-// J is the URDF joint frame: the child's link frame coincides with it at joint position 0.
-enum class JointType { kFixed, kRevolute, kContinuous, kPrismatic };
-const char* JointTypeName(JointType type);  // "fixed", "revolute", "continuous", "prismatic"
+// J is the URDF joint frame: the child's link frame coincides with it at joint position 0. A planar joint keeps the
+// child's joint origin in the plane through the parent's with normal a and lets it turn about a only: three degrees
+// of freedom and no single coordinate (no limits, drives, friction or position of its own).
+enum class JointType { kFixed, kRevolute, kContinuous, kPrismatic, kPlanar };
+const char* JointTypeName(JointType type);  // "fixed", "revolute", "continuous", "prismatic", "planar"
 
 struct Joint {
   std::string name;
@@ -77,9 +79,9 @@ struct Joint {
   double mimic_multiplier = 1.0;  // (-)
   double mimic_offset = 0.0;      // rad or m
 
-  bool has_coordinate() const { return type != JointType::kFixed; }
+  bool has_coordinate() const { return type != JointType::kFixed && type != JointType::kPlanar; }
   bool mimics() const { return mimic_leader >= 0; }
-  int num_equalities() const { return type == JointType::kFixed ? 6 : 5; }
+  int num_equalities() const { return type == JointType::kFixed ? 6 : type == JointType::kPlanar ? 3 : 5; }
   // Unknowns of the joint in the step NCP: one multiplier per equality, two limit multipliers when limited, the
   // friction fraction and slip speed when friction > 0, and the mimic multiplier last (mimic_column()).
   int size() const { return num_equalities() + (limited ? 2 : 0) + (friction > 0.0 ? 2 : 0) + (mimics() ? 1 : 0); }
