@@ -15,7 +15,7 @@
 namespace implicit_sim {
 namespace {
 
-constexpr double kG = 9.81;  // m/s^2
+constexpr double kFtGravity = 9.81;  // m/s^2
 
 // A link of mass m (kg) whose centre of mass sits at `com` (link frame) with a small sphere there.
 std::string FtArmLink(const std::string& name, double mass, const std::string& com) {
@@ -72,20 +72,20 @@ TEST(ForceTorqueSensor, EachJointOfAHangingChainCarriesTheWeightBelowIt) {
   EXPECT_EQ(model.sensors[0].rate_hz, 100.0);
   const ForceTorqueReading top = StepAndRead(model, 0, 50);
   const ForceTorqueReading elbow = StepAndRead(model, 1, 50);
-  EXPECT_LT((top.force_L - Vec3(0, 0, 3.0 * kG)).norm(), 1e-8) << top.force_L.transpose();
-  EXPECT_LT((elbow.force_L - Vec3(0, 0, 1.0 * kG)).norm(), 1e-8) << elbow.force_L.transpose();
+  EXPECT_LT((top.force_L - Vec3(0, 0, 3.0 * kFtGravity)).norm(), 1e-8) << top.force_L.transpose();
+  EXPECT_LT((elbow.force_L - Vec3(0, 0, 1.0 * kFtGravity)).norm(), 1e-8) << elbow.force_L.transpose();
   EXPECT_LT(top.torque_L.norm(), 1e-8) << top.torque_L.transpose();  // every weight hangs straight below
   EXPECT_LT(elbow.torque_L.norm(), 1e-8) << elbow.torque_L.transpose();
 }
 
 TEST(ForceTorqueSensor, AnArmOnItsLimitOrHeldByAnEffortReadsTheMomentOfItsWeight) {
-  const Vec3 weight_moment(0, -0.5 * kG, 0);  // the joint's moment on the arm about the pivot: -(0.5 x) x (-m g z)
+  const Vec3 weight_moment(0, -0.5 * kFtGravity, 0);  // the joint's moment on the arm about the pivot: -(0.5 x) x (-m g z)
   {
     SCOPED_TRACE("on the upper limit 0");
     const Model model = LoadSceneFromString(
         HorizontalArm("<limit lower='-1' upper='0' effort='100' velocity='1'/>", ""), "arm");
     const ForceTorqueReading reading = StepAndRead(model, 0, 50);
-    EXPECT_LT((reading.force_L - Vec3(0, 0, kG)).norm(), 1e-8) << reading.force_L.transpose();
+    EXPECT_LT((reading.force_L - Vec3(0, 0, kFtGravity)).norm(), 1e-8) << reading.force_L.transpose();
     EXPECT_LT((reading.torque_L - weight_moment).norm(), 1e-8) << reading.torque_L.transpose();
   }
   {
@@ -93,7 +93,7 @@ TEST(ForceTorqueSensor, AnArmOnItsLimitOrHeldByAnEffortReadsTheMomentOfItsWeight
     const Model model = LoadSceneFromString(
         HorizontalArm("", "<joint name='pivot' position='0' velocity='0' effort='-4.905'/>"), "arm");
     const ForceTorqueReading reading = StepAndRead(model, 0, 50);
-    EXPECT_LT((reading.force_L - Vec3(0, 0, kG)).norm(), 1e-8) << reading.force_L.transpose();
+    EXPECT_LT((reading.force_L - Vec3(0, 0, kFtGravity)).norm(), 1e-8) << reading.force_L.transpose();
     EXPECT_LT((reading.torque_L - weight_moment).norm(), 1e-8) << reading.torque_L.transpose();
   }
   {
@@ -111,14 +111,14 @@ TEST(ForceTorqueSensor, AnArmOnItsLimitOrHeldByAnEffortReadsTheMomentOfItsWeight
   {
     SCOPED_TRACE("a commanded effort, passed to the step as an external wrench");
     const Model model = LoadSceneFromString(HorizontalArm("", ""), "arm");
-    Eigen::VectorXd efforts = Eigen::VectorXd::Constant(1, -0.5 * kG), wrench_W = Eigen::VectorXd::Zero(model.nv());
+    Eigen::VectorXd efforts = Eigen::VectorXd::Constant(1, -0.5 * kFtGravity), wrench_W = Eigen::VectorXd::Zero(model.nv());
     AddJointEffortWrench(model, State::Initial(model), efforts, &wrench_W);  // the arm does not move: one wrench
     const ForceTorqueReading with = StepAndRead(model, 0, 50, &wrench_W, &efforts);
-    EXPECT_LT((with.force_L - Vec3(0, 0, kG)).norm(), 1e-8) << with.force_L.transpose();
+    EXPECT_LT((with.force_L - Vec3(0, 0, kFtGravity)).norm(), 1e-8) << with.force_L.transpose();
     EXPECT_LT((with.torque_L - weight_moment).norm(), 1e-8) << with.torque_L.transpose();
     // Without the efforts the commanded part is left out: the constraint alone carries the weight's force.
     const ForceTorqueReading without = StepAndRead(model, 0, 50, &wrench_W, nullptr);
-    EXPECT_LT((without.force_L - Vec3(0, 0, kG)).norm(), 1e-8);
+    EXPECT_LT((without.force_L - Vec3(0, 0, kFtGravity)).norm(), 1e-8);
     EXPECT_LT(without.torque_L.norm(), 1e-8) << without.torque_L.transpose();
   }
 }
@@ -149,11 +149,11 @@ TEST(ForceTorqueSensor, ASwingingPendulumsPivotReadsItsCentripetalAndTangentialR
       const ForceTorqueReading reading = ReadForceTorque(model, model.sensors[0], before, state, options.h, scheme,
                                                          data.contacts, nullptr, nullptr, &subtree);
       const double q = 0.5 * (JointPosition(model, before, 0) + JointPosition(model, state, 0));
-      const double q_dot2 = 2.0 * m * kG * L * std::sin(q) / I, q_ddot = m * kG * L * std::cos(q) / I;
+      const double q_dot2 = 2.0 * m * kFtGravity * L * std::sin(q) / I, q_ddot = m * kFtGravity * L * std::cos(q) / I;
       const Vec3 e_r(std::cos(q), 0, -std::sin(q)), e_t(-std::sin(q), 0, -std::cos(q));  // world frame
-      const Vec3 force_W = m * (-L * q_dot2 * e_r + L * q_ddot * e_t) - m * Vec3(0, 0, -kG);
+      const Vec3 force_W = m * (-L * q_dot2 * e_r + L * q_ddot * e_t) - m * Vec3(0, 0, -kFtGravity);
       const Mat3 R_WL = before.X_WL(model, model.FindBody("arm")).linear();
-      worst_force = std::max(worst_force, (R_WL * reading.force_L - force_W).norm() / (m * kG));
+      worst_force = std::max(worst_force, (R_WL * reading.force_L - force_W).norm() / (m * kFtGravity));
       worst_axis_moment = std::max(worst_axis_moment, std::abs(reading.torque_L.y()));
     }
     EXPECT_LT(worst_force, force_bar);          // of the weight, over the swing
