@@ -1,6 +1,7 @@
 // The force-torque sensor (<implicit_sim><sensor type='force_torque' joint=...>, step/sensors.h) against closed forms:
 // a hanging chain's joints carry the weight below them, an arm resting on its joint limit or held by an effort reads
-// the moment of its weight (and nothing where the ground carries it), and a swinging pendulum's pivot the centripetal and tangential reaction m (a_cm - g).
+// the moment of its weight (and nothing where the ground carries it), and a swinging pendulum's pivot the centripetal
+// and tangential reaction m (a_cm - g).
 #include <cmath>
 #include <string>
 
@@ -25,7 +26,7 @@ std::string FtArmLink(const std::string& name, double mass, const std::string& c
 }
 
 std::string FtJoint(const std::string& name, const std::string& type, const std::string& parent,
-                  const std::string& child, const std::string& xyz, const std::string& extra = "") {
+                    const std::string& child, const std::string& xyz, const std::string& extra = "") {
   return "<joint name='" + name + "' type='" + type + "'><parent link='" + parent + "'/><child link='" + child +
          "'/><origin xyz='" + xyz + "'/><axis xyz='0 1 0'/>" + extra + "</joint>";
 }
@@ -36,18 +37,18 @@ std::string HangingChain() {
   return "<robot name='chain'><implicit_sim><sensor name='ft_top' type='force_torque' joint='top' rate='100'/>"
          "<sensor name='ft_elbow' type='force_torque' joint='elbow'/></implicit_sim><link name='world'/>" +
          FtArmLink("upper", 2.0, "0 0 -0.5") + FtArmLink("lower", 1.0, "0 0 -0.3") +
-         FtJoint("top", "continuous", "world", "upper", "0 0 2") + FtJoint("elbow", "continuous", "upper", "lower",
-                                                                         "0 0 -1") +
-         "</robot>";
+         FtJoint("top", "continuous", "world", "upper", "0 0 2") +
+         FtJoint("elbow", "continuous", "upper", "lower", "0 0 -1") + "</robot>";
 }
 
 // A 1 kg arm along x (centre 0.5 m out) on a pivot about y at z = 1 m (revolute with joint_extra's limit, else
 // continuous): gravity turns it towards +q.
 std::string HorizontalArm(const std::string& joint_extra, const std::string& sim_extra,
                           const std::string& sensor = "<sensor name='ft' type='force_torque' joint='pivot'/>") {
-  return "<robot name='arm'><implicit_sim>" + sensor + sim_extra +
-         "</implicit_sim><link name='world'/>" + FtArmLink("arm", 1.0, "0.5 0 0") +
-         FtJoint("pivot", joint_extra.empty() ? "continuous" : "revolute", "world", "arm", "0 0 1", joint_extra) + "</robot>";
+  return "<robot name='arm'><implicit_sim>" + sensor + sim_extra + "</implicit_sim><link name='world'/>" +
+         FtArmLink("arm", 1.0, "0.5 0 0") +
+         FtJoint("pivot", joint_extra.empty() ? "continuous" : "revolute", "world", "arm", "0 0 1", joint_extra) +
+         "</robot>";
 }
 
 ForceTorqueReading StepAndRead(const Model& model, int sensor, int steps, const Eigen::VectorXd* wrench_W = nullptr,
@@ -79,7 +80,8 @@ TEST(ForceTorqueSensor, EachJointOfAHangingChainCarriesTheWeightBelowIt) {
 }
 
 TEST(ForceTorqueSensor, AnArmOnItsLimitOrHeldByAnEffortReadsTheMomentOfItsWeight) {
-  const Vec3 weight_moment(0, -0.5 * kFtGravity, 0);  // the joint's moment on the arm about the pivot: -(0.5 x) x (-m g z)
+  // The joint's moment on the arm about the pivot: -(0.5 x) x (-m g z).
+  const Vec3 weight_moment(0, -0.5 * kFtGravity, 0);
   {
     SCOPED_TRACE("on the upper limit 0");
     const Model model = LoadSceneFromString(
@@ -111,7 +113,8 @@ TEST(ForceTorqueSensor, AnArmOnItsLimitOrHeldByAnEffortReadsTheMomentOfItsWeight
   {
     SCOPED_TRACE("a commanded effort, passed to the step as an external wrench");
     const Model model = LoadSceneFromString(HorizontalArm("", ""), "arm");
-    Eigen::VectorXd efforts = Eigen::VectorXd::Constant(1, -0.5 * kFtGravity), wrench_W = Eigen::VectorXd::Zero(model.nv());
+    Eigen::VectorXd efforts = Eigen::VectorXd::Constant(1, -0.5 * kFtGravity);
+    Eigen::VectorXd wrench_W = Eigen::VectorXd::Zero(model.nv());
     AddJointEffortWrench(model, State::Initial(model), efforts, &wrench_W);  // the arm does not move: one wrench
     const ForceTorqueReading with = StepAndRead(model, 0, 50, &wrench_W, &efforts);
     EXPECT_LT((with.force_L - Vec3(0, 0, kFtGravity)).norm(), 1e-8) << with.force_L.transpose();

@@ -224,8 +224,8 @@ TEST(StepProblemJacobian, JointsOfEveryTypeWithLimitsFrictionAndDamping) {
 TEST(StepProblemJacobian, PlanarJointInEveryStage) {
   for (const bool sparse : {false, true}) {
     for (const Stage stage : {Stage::kPaper, Stage::kRattlePosition, Stage::kRattleVelocity}) {
-      ExpectJacobianMatchesFiniteDifferences(test_models::PlanarJointRobot(), 60 + static_cast<unsigned>(stage) * 2 + sparse,
-                                             sparse, false, 0.0, stage);
+      const unsigned seed = 60 + static_cast<unsigned>(stage) * 2 + sparse;
+      ExpectJacobianMatchesFiniteDifferences(test_models::PlanarJointRobot(), seed, sparse, false, 0.0, stage);
     }
   }
 }
