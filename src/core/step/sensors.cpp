@@ -71,7 +71,8 @@ ForceTorqueReading ReadForceTorque(const Model& model, const Sensor& sensor, con
     const int b = model.moving_bodies[k];
     if (!(*in_subtree)[b]) continue;
     const Body& body = model.bodies[b];
-    const Mat3 R0 = before.X_WB(model, b).linear(), R1 = after.X_WB(model, b).linear();
+    const Pose X_WB0 = before.X_WB(model, b), X_WB1 = after.X_WB(model, b);
+    const Mat3 R0 = X_WB0.linear(), R1 = X_WB1.linear();
     const Vec3 L0 = R0 * body.I_B * R0.transpose() * before.w_WB(k);
     const Vec3 L1 = R1 * body.I_B * R1.transpose() * after.w_WB(k);
     Vec3 f = body.mass * (after.v_WB(k) - before.v_WB(k)) / h - body.mass * model.gravity_W - body.f_applied_W;
@@ -82,8 +83,9 @@ ForceTorqueReading ReadForceTorque(const Model& model, const Sensor& sensor, con
     }
     // The paper's step applies joint forces at the start-of-step centres of mass (SHAKE); RATTLE half there, half at
     // the end (its velocity stage).
-    const Vec3 p_WB0 = before.X_WB(model, b).translation(), p_WB1 = after.X_WB(model, b).translation();
-    const Vec3 p_WB = scheme == StepperOptions::Scheme::kRattle ? Vec3(0.5 * (p_WB0 + p_WB1)) : p_WB0;
+    const Vec3 p_WB = scheme == StepperOptions::Scheme::kRattle
+                          ? Vec3(0.5 * (X_WB0.translation() + X_WB1.translation()))
+                          : Vec3(X_WB0.translation());
     moment_W += (p_WB - p_WL).cross(f) + tau;
     force_W += f;
   }
