@@ -47,7 +47,7 @@ void ReadOptionParams(const ros::NodeHandle& pnh, StepperOptions* options) {
 
 // The node's own private parameters besides the options table's.
 const char* const kNodeParams[] = {"scene", "scenes_dir", "read_dirs", "paused", "on_fault", "on_master_loss", "world_frame", "publish_joint_link_tf",
-                                   "drive_gravity_compensation", "min_real_time_fraction",
+                                   "drive_gravity_compensation", "enforce_velocity_limits", "min_real_time_fraction",
                                    "interactive_markers", "floating_root", "input_journal", "replay_journal"};
 
 void RefuseUnknownParams(const ros::NodeHandle& pnh) {
@@ -125,6 +125,7 @@ NodeParams NodeParams::Read(const ros::NodeHandle& pnh) {
   p.world_frame = ReadParam(pnh, "world_frame", p.world_frame);
   p.publish_joint_link_tf = ReadParam(pnh, "publish_joint_link_tf", p.publish_joint_link_tf);
   p.drive_gravity_compensation = ReadParam(pnh, "drive_gravity_compensation", p.drive_gravity_compensation);
+  p.enforce_velocity_limits = ReadParam(pnh, "enforce_velocity_limits", p.enforce_velocity_limits);
   p.min_real_time_fraction = ReadParam(pnh, "min_real_time_fraction", p.min_real_time_fraction);
   if (!(p.min_real_time_fraction >= 0.0 && p.min_real_time_fraction <= 1.0)) {
     throw std::invalid_argument("parameter ~min_real_time_fraction = " + FormatNumber(p.min_real_time_fraction) +

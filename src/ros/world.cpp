@@ -53,6 +53,7 @@ LoaderOptions SceneLoaderOptions(const NodeParams& params, const std::string& me
   LoaderOptions options;
   options.interrupt = stop;
   options.floating_root = params.floating_root;
+  options.enforce_velocity_limits = params.enforce_velocity_limits;
   options.resolve_package_uri = ResolvePackageUri;
   options.mesh_directory = mesh_directory;
   options.mesh_sandbox = NodeSandbox(params, mesh_directory);

@@ -507,7 +507,9 @@ class NodeContract(unittest.TestCase):
         self.assertEqual(list(deleted.deleted), ["ball_5"])
         self.assertLess(delete_s, 0.5)
         self.assertFalse(after.success)  # gone from the snapshot
-        self.assertEqual(other.message, "t = 0 s")  # the cut step was undone: no time passed
+        # The cut step was undone (no time passed) and redone without the sphere; that redone step may already have
+        # finished by this call (seen once on a loaded machine), never more than one.
+        self.assertIn(other.message, ("t = 0 s", "t = 0.01 s"))
 
     def test_6c_after_a_master_restart_the_node_registers_again_or_exits(self):
         # A master of its own on a free port, killed and started again; the node runs against it.

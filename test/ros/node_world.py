@@ -18,6 +18,7 @@
 - the Panda as published spawns beside the UR5, and both, held by their drives with the gravity feed-forward
   (~drive_gravity_compensation, set by node_world.test), run 5 s at real time with every step converged and every
   joint within 1e-4 rad of its target."""
+import math
 import os
 import statistics
 import struct
@@ -253,6 +254,20 @@ class NodeWorld(unittest.TestCase):
             self.assertFalse(res.success, names)
             self.assertIn(message, res.message)
             self.assertEqual(self.joint_positions(), q)
+        # Kinova's Jaco as published: Collada (Z_UP) collision meshes, self-collision on, Kinova's home pose.
+        home = {"j2n6s300_joint_1": 4.80, "j2n6s300_joint_2": 2.92, "j2n6s300_joint_3": 1.00,
+                "j2n6s300_joint_4": 4.20, "j2n6s300_joint_5": 1.44, "j2n6s300_joint_6": 1.31}
+        res = call("spawn", Spawn, file="package://kinova_description/urdf/j2n6s300_standalone.urdf", prefix="jaco/",
+                   pose=pose(0.0, 3.0, 0.3), joint_names=list(home), joint_positions=list(home.values()),
+                   self_collide=True)
+        self.assertTrue(res.success, res.message)
+        self.assertIn("jaco/j2n6s300_link_finger_tip_3", list(res.bodies))
+        q_jaco = self.joint_positions()
+        for name, value in home.items():  # continuous joints (1, 4, 5, 6) are published within (-pi, pi]
+            self.assertAlmostEqual(math.remainder(q_jaco["jaco/" + name] - value, 2 * math.pi), 0.0, delta=1e-9,
+                                   msg=name)
+        self.assertTrue(call("delete", Delete, ["jaco/root"]).success)
+        self.assertNotIn("jaco/j2n6s300_joint_1", self.joint_positions())
         self.assertTrue(call("unpause", Trigger).success)
 
     def test_7_a_spawned_balls_contact_sensor_and_imu_and_a_pendulums_force_torque_sensor_read_their_weight(self):

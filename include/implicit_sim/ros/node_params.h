@@ -71,6 +71,9 @@ struct NodeParams {
   bool interactive_markers = true;  // an interactive marker per moving body (~drag) that pushes it with the mouse
   // A scene whose root link is not `world` (a robot URDF): false welds the root to the world, true makes it free.
   bool floating_root = false;
+  // Every load (the scene, ~spawn, ~load_scene) bounds the rates of joints with a URDF <limit velocity> > 0
+  // (LoaderOptions::enforce_velocity_limits; a joint's <implicit_sim><joint enforce_velocity_limit> overrides it).
+  bool enforce_velocity_limits = false;
   // The input journal (ros/input_journal.h): a file to record every applied command into, and one to replay.
   std::string input_journal, replay_journal;
   // Reads and validates; throws std::invalid_argument naming the parameter and its range, or an unknown private

@@ -115,7 +115,7 @@ JointStarts ReadJointStarts(const tinyxml2::XMLElement* sim, const urdf::ModelIn
   for (auto* e = sim ? sim->FirstChildElement("joint") : nullptr; e; e = e->NextSiblingElement("joint")) {
     const char* name = e->Attribute("name");
     const std::string where = "<implicit_sim><joint name='" + std::string(name ? name : "") + "'>";
-    CheckAttributes(e, {"name", "position", "velocity", "effort"}, where);
+    CheckAttributes(e, {"name", "position", "velocity", "effort", "enforce_velocity_limit"}, where);
     const urdf::JointConstSharedPtr joint = name ? urdf.getJoint(name) : nullptr;
     if (!joint) Fail(where + ": attribute 'name' must name a joint of the scene");
     if (!HasCoordinate(*joint)) Fail(where + ": the joint must be revolute, continuous or prismatic");
@@ -127,6 +127,13 @@ JointStarts ReadJointStarts(const tinyxml2::XMLElement* sim, const urdf::ModelIn
     start.velocity = ReadScalar(e, "velocity", where, -1e5, 1e5, false, 0.0, false);
     const double effort_limit = joint->limits && joint->limits->effort > 0.0 ? joint->limits->effort : 1e9;
     start.effort = ReadScalar(e, "effort", where, -effort_limit, effort_limit, false, 0.0, false);
+    if (const char* enforce = e->Attribute("enforce_velocity_limit")) {
+      const std::string value = enforce;
+      if (value != "true" && value != "false") {
+        Fail(where + " attribute 'enforce_velocity_limit' = '" + value + "' must be 'true' or 'false'");
+      }
+      start.enforce_velocity_limit = value == "true";
+    }
     starts[name] = start;
   }
   for (const auto& [name, q] : positions) {
@@ -238,12 +245,33 @@ const Pose& InitialLinkPoses::Of(const urdf::Link& link) {
 
 namespace {
 
+// Whether the step bounds the joint's rate (Joint::velocity_limited): asked for by the joint's own entry or else by the
+// loader's default, for a joint with a coordinate that mimics none (its leader's bound carries it). A joint whose own
+// entry asks for it without a <limit velocity> > 0, or that starts faster than its bound, is refused.
+void ReadVelocityLimit(const urdf::Joint& u, std::optional<bool> own, bool by_default, Joint* joint) {
+  const std::string where = "<implicit_sim><joint name='" + u.name + "'>";
+  if (own && *own && (u.mimic || !(joint->velocity_limit > 0.0))) {
+    Fail(where + " attribute 'enforce_velocity_limit': " +
+         (u.mimic ? std::string("the joint mimics another; bound its leader instead")
+                  : "the joint has no <limit velocity> > 0 to enforce"));
+  }
+  joint->velocity_limited = own.value_or(by_default) && joint->has_coordinate() && !u.mimic &&
+                            joint->velocity_limit > 0.0;
+  if (joint->velocity_limited && std::abs(joint->initial_velocity) > joint->velocity_limit) {
+    Fail(where + ": start velocity " + FormatNumber(joint->initial_velocity) + " is outside its velocity limit [" +
+         FormatNumber(-joint->velocity_limit) + ", " + FormatNumber(joint->velocity_limit) + "]");
+  }
+}
+
 // Joint parameters from urdfdom's joint (whose numbers CheckJointElement found finite), with their ranges.
-void ReadJointParameters(const urdf::Joint& u, const JointStarts& starts, Joint* joint, LoadNotes* notes) {
+void ReadJointParameters(const urdf::Joint& u, const JointStarts& starts, bool enforce_velocity_limits, Joint* joint,
+                         LoadNotes* notes) {
   const std::string where = JointWhere(u);
   if (u.limits) {
     if (!(u.limits->effort >= 0.0)) Fail(where + " <limit> attribute 'effort' must be >= 0 (0: no clamp)");
+    if (!(u.limits->velocity >= 0.0)) Fail(where + " <limit> attribute 'velocity' must be >= 0 (0: none)");
     joint->effort_limit = u.limits->effort;
+    joint->velocity_limit = u.limits->velocity;
   }
   joint->limited = IsLimited(u);
   if (joint->limited) {
@@ -287,6 +315,8 @@ void ReadJointParameters(const urdf::Joint& u, const JointStarts& starts, Joint*
     joint->initial_velocity = start->second.velocity;
     joint->applied_effort = start->second.effort;
   }
+  ReadVelocityLimit(u, start == starts.end() ? std::nullopt : start->second.enforce_velocity_limit,
+                    enforce_velocity_limits, joint);
 }
 
 // The joint frame's axes in the parent's body frame (X_PJ: joint frame in it) and in the child's (X_CL: the child
@@ -339,7 +369,7 @@ std::string NearestBodyLink(const urdf::ModelInterface& urdf, const Model& model
 }  // namespace
 
 void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, const RootPlacement& root,
-                 InitialLinkPoses* poses, Model* model, LoadNotes* notes) {
+                 bool enforce_velocity_limits, InitialLinkPoses* poses, Model* model, LoadNotes* notes) {
   std::vector<urdf::JointSharedPtr> ordered;
   std::unordered_map<const urdf::Link*, int> depths;
   std::unordered_map<const urdf::Joint*, int> child_depth;
@@ -378,7 +408,7 @@ void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, co
     const std::string parent_link = NearestBodyLink(urdf, *model, u->parent_link_name, &X_AL);
     joint.parent = world_parent ? -1 : model->FindBody(parent_link);
     joint.child = child_index;
-    ReadJointParameters(*u, starts, &joint, notes);
+    ReadJointParameters(*u, starts, enforce_velocity_limits, &joint, notes);
     const Vec3 a = joint.type == JointType::kFixed ? Vec3::UnitX() : UnitAxis(*u);
     const Pose X_AJ = X_AL * ToPose(u->parent_to_joint_origin_transform);  // in the parent body's link frame
     const Pose X_PA = joint.parent < 0 ? Pose::Identity() : model->bodies[joint.parent].X_BL;

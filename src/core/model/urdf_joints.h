@@ -29,6 +29,8 @@ struct JointStart {
   double position = 0.0;
   double velocity = 0.0;
   double effort = 0.0;  // constant applied effort, N m or N
+  // <implicit_sim><joint enforce_velocity_limit="true|false">; unset: LoaderOptions::enforce_velocity_limits.
+  std::optional<bool> enforce_velocity_limit;
 };
 using JointStarts = std::map<std::string, JointStart>;
 // `positions` (LoaderOptions::joint_positions) override the file's positions.
@@ -95,8 +97,10 @@ class InitialLinkPoses {
 // empty; call before Model::Finalize.
 // A revolute joint whose range is 2 pi or wider keeps no limit rows (its angle is measured in one turn, where such a
 // limit is never reached from one side): one note in `notes`.
+// `enforce_velocity_limits` (LoaderOptions) bounds the rate of every joint with a <limit velocity> > 0 that mimics none,
+// unless its <implicit_sim><joint enforce_velocity_limit> says otherwise.
 void BuildJoints(const urdf::ModelInterface& urdf, const JointStarts& starts, const RootPlacement& root,
-                 InitialLinkPoses* poses, Model* model, LoadNotes* notes);
+                 bool enforce_velocity_limits, InitialLinkPoses* poses, Model* model, LoadNotes* notes);
 
 }  // namespace loader
 }  // namespace implicit_sim

@@ -636,7 +636,7 @@ Model LoadSceneFromString(const std::string& xml, const std::string& scene_name,
     }
   }
   ThrowIfLoadInterrupted(options.interrupt, scene_name);
-  BuildJoints(*urdf_model, joint_starts, placement, &initial_poses, &model, &notes);
+  BuildJoints(*urdf_model, joint_starts, placement, options.enforce_velocity_limits, &initial_poses, &model, &notes);
   ThrowIfLoadInterrupted(options.interrupt, scene_name);
   ExcludeSelfCollisions(sim, *urdf_model, &model);
   ThrowIfLoadInterrupted(options.interrupt, scene_name);

@@ -100,9 +100,13 @@ void StepLayout::SetActivePairs(const std::vector<int>& pairs, const Eigen::Vect
   row_kinds_.assign(size_, RowKind::kEquation);
   for (int j : joints_) {
     const Joint& joint = model_.joints[j];
-    const int extra = joint_offset_[j] + joint.num_equalities();
+    const int o = joint_offset_[j], extra = o + joint.num_equalities();
     if (joint.limited) row_kinds_[extra] = row_kinds_[extra + 1] = RowKind::kForceComplementarity;  // l / Fs _|_ gap
-    if (joint.friction > 0.0) row_kinds_[extra + (joint.limited ? 3 : 1)] = RowKind::kComplementarity;  // sigma_f
+    if (joint.friction > 0.0) row_kinds_[o + joint.friction_column() + 1] = RowKind::kComplementarity;  // sigma_f
+    if (joint.velocity_limited) {  // u / Fs _|_ v_max -+ qdot
+      row_kinds_[o + joint.velocity_limit_column()] = row_kinds_[o + joint.velocity_limit_column() + 1] =
+          RowKind::kForceComplementarity;
+    }
   }
   for (const PairBlock& blk : blocks_) {
     for (int i = blk.offset + pair_index::kAlpha; i <= blk.sigma(); ++i) {

@@ -101,7 +101,7 @@ void SeedJoints(const StepLayout& layout, const StepKinematics& kinematics, Eige
     const bool world = jb.parent < 0;
     const double rate = kinematics.position_gradient(j).Rate(world ? zero : kinematics.start(jb.parent).v0,
                                                              world ? zero : kinematics.start(jb.parent).w0, c.v0, c.w0);
-    const int s_col = o + joint.num_equalities() + (joint.limited ? 2 : 0);
+    const int s_col = o + joint.friction_column();
     (*z)[s_col] = rate > 1e-9 ? -1.0 : (rate < -1e-9 ? 1.0 : 0.0);
     (*z)[s_col + 1] = std::abs(rate) > 1e-9 ? std::abs(rate) : 1e-3;  // sigma > 0: see SeedFriction
   }

@@ -1,9 +1,10 @@
 // Vendor robot descriptions as published (test/data/vendor: the xacro output of ros-industrial/universal_robot's
-// ur5.xacro and frankaemika/franka_ros's panda.urdf.xacro, with their collision meshes), loaded unedited: the UR5
-// (+-2 pi joints, 7 STL hulls), the Panda without <inertial> (several collisions per link, mimic fingers, franka's
-// <dynamics D K>) and the Panda with gazebo:=true. Each is held at a pose by PD drives for 1 s with every step
-// converged; the second finger is the first's mimic follower. Also a robot's configuration set by joint positions
-// (model/joint_configuration.h), the hull cache of repeated loads and the mimic fingers grasping a part.
+// ur5.xacro, frankaemika/franka_ros's panda.urdf.xacro and Kinovarobotics/kinova-ros's j2n6s300_standalone.xacro, with
+// their collision meshes), loaded unedited: the UR5 (+-2 pi joints, 7 STL hulls), the Panda without <inertial> (several
+// collisions per link, mimic fingers, franka's <dynamics D K>), the Panda with gazebo:=true and the Jaco (13 Collada
+// hulls, Z_UP). Each is held at a pose by PD drives for 1 s with every step converged; the Panda's second finger is
+// the first's mimic follower. Also a robot's configuration set by joint positions (model/joint_configuration.h), the
+// hull cache of repeated loads and the mimic fingers grasping a part.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -145,6 +146,68 @@ TEST(VendorRobots, ThePandaLoadsAsPublishedWithItsFingersMimicking) {
     EXPECT_NE(note.find("'panda_link5'-'panda_link7' (0.0064 m)"), std::string::npos) << note;
   }
   EXPECT_EQ(zero_pose_notes, 1);
+}
+
+// Kinova's j2n6s300 (a 6-joint Jaco 2 with three fingers), whose 13 collision meshes are Blender Collada files with
+// <up_axis>Z_UP</up_axis>: it loads unedited at Kinova's home pose (joints 2 and 3 have limits that exclude zero) and is
+// held by its drives with every step converged, once as published and once spawned with self-collision on (the hulls
+// of links no joint joins become contact pairs: the fingers, hand and forearm). The vendor also ships each part as STL in the same frame: the hull of
+// finger_distal.dae matches the hull of finger_distal.STL vertex for vertex, so the up axis is honoured as the file
+// states it.
+TEST(VendorRobots, TheKinovaJacoLoadsItsColladaMeshesAsPublished) {
+  const std::map<std::string, double> home = {
+      {"j2n6s300_joint_1", 4.80}, {"j2n6s300_joint_2", 2.92}, {"j2n6s300_joint_3", 1.00},
+      {"j2n6s300_joint_4", 4.20}, {"j2n6s300_joint_5", 1.44}, {"j2n6s300_joint_6", 1.31}};
+  std::vector<std::string> notes;
+  const Model model = LoadVendor("kinova_description/urdf/j2n6s300_standalone.urdf", home, &notes);
+  EXPECT_EQ(model.num_moving(), 12);  // six links, three fingers of two links each
+  int nonconverged = 0;
+  const double compensated = Hold(model, 1.0, &nonconverged, true);
+  EXPECT_EQ(nonconverged, 0);
+  EXPECT_LT(compensated, 1e-6);
+  SceneAddition self_colliding;
+  std::ifstream in(kVendorDir + "/kinova_description/urdf/j2n6s300_standalone.urdf");
+  self_colliding.urdf.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  self_colliding.self_collide = true;
+  const Model colliding = LoadSceneFromString(AddToScene("<robot name='w'><link name='world'/></robot>",
+                                                         self_colliding, nullptr), "jaco", VendorOptions(home, &notes));
+  EXPECT_GT(colliding.pairs.size(), 20u);
+  const double colliding_error = Hold(colliding, 1.0, &nonconverged, true);
+  EXPECT_EQ(nonconverged, 0);
+  EXPECT_LT(colliding_error, 1e-6);
+  std::printf("[ vendor ] Jaco j2n6s300: %zu bodies, held 1 s with the largest joint error %.2e rad; with "
+              "self-collision (%zu pairs) %.2e rad\n", model.bodies.size(), compensated, colliding.pairs.size(),
+              colliding_error);
+
+  auto finger_hull = [&](const std::string& mesh) {
+    const std::string urdf =
+        "<robot name='f'><link name='world'/><link name='finger'><inertial><mass value='0.01'/><inertia ixx='1e-6' "
+        "iyy='1e-6' izz='1e-6' ixy='0' ixz='0' iyz='0'/></inertial><collision><geometry><mesh filename='package://"
+        "kinova_description/meshes/" + mesh + "'/></geometry></collision></link><joint name='j' type='floating'>"
+        "<parent link='world'/><child link='finger'/></joint></robot>";
+    return LoadSceneFromString(urdf, "f", VendorOptions({}, &notes)).bodies[0].shapes[0].vertices;
+  };
+  // Support functions h(d) = max over the hull of d . v along 400 directions spread over the sphere: the two hulls
+  // are simplified separately (to max_hull_faces), so they agree to the simplification's tolerance, not vertex for
+  // vertex; a hull turned by 90 deg would differ by centimetres.
+  auto support = [](const std::vector<Vec3>& vertices, const Vec3& d) {
+    double h = -1e300;
+    for (const Vec3& v : vertices) h = std::max(h, d.dot(v));
+    return h;
+  };
+  const std::vector<Vec3> from_collada = finger_hull("finger_distal.dae"), from_stl = finger_hull("finger_distal.STL");
+  double largest = 0.0, extent = 0.0;
+  const int n = 400;
+  for (int k = 0; k < n; ++k) {
+    const double z = 1.0 - (2.0 * k + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = k * 2.399963229728653;
+    const Vec3 d(r * std::cos(phi), r * std::sin(phi), z);
+    largest = std::max(largest, std::abs(support(from_collada, d) - support(from_stl, d)));
+    extent = std::max(extent, support(from_stl, d) + support(from_stl, -d));
+  }
+  std::printf("[ vendor ] Jaco finger_distal: the Collada and STL hulls' support functions differ by at most %.2e m "
+              "over a %.3f m part\n", largest, extent);
+  EXPECT_GT(extent, 0.03);  // the distal finger is about 4.5 cm long
+  EXPECT_LT(largest, 5e-4);
 }
 
 

@@ -272,6 +272,24 @@ TEST(StepProblemJacobian, MimicRowInEveryStage) {
   }
 }
 
+// Velocity-limit rows (Joint::velocity_limited) on the revolute shoulder (with limits, friction and damping beside
+// them), the prismatic slide and the continuous axle, in every stage, dense and sparse.
+TEST(StepProblemJacobian, VelocityLimitRowsInEveryStage) {
+  Model model = test_models::JointedRobot();
+  for (const char* name : {"shoulder", "slide", "axle"}) {
+    Joint& joint = model.joints[model.FindJoint(name)];
+    joint.velocity_limited = true;
+    joint.velocity_limit = 0.8;
+  }
+  unsigned seed = 80;
+  for (const Stage stage : {Stage::kPaper, Stage::kRattlePosition, Stage::kRattleVelocity}) {
+    for (const bool sparse : {false, true}) {
+      SCOPED_TRACE("stage " + std::to_string(static_cast<int>(stage)) + (sparse ? ", sparse" : ", dense"));
+      ExpectJacobianMatchesFiniteDifferences(model, ++seed, sparse, false, 0.0, stage);
+    }
+  }
+}
+
 TEST(StepProblemJacobian, ProjectedMultipliers) {
   ExpectJacobianMatchesFiniteDifferences(test_models::SphereOnTwoSpheres(), 14, true, true);
   ExpectJacobianMatchesFiniteDifferences(test_models::BoxAndSuperellipsoid(), 15, false, true);

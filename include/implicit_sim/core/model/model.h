@@ -68,6 +68,11 @@ struct Joint {
   bool limited = false;        // revolute and prismatic joints (URDF <limit lower upper>)
   double lower = 0.0, upper = 0.0;  // rad (revolute) or m (prismatic)
   double effort_limit = 0.0;   // commanded efforts are clamped to +-effort_limit (N m or N); 0: no clamp
+  double velocity_limit = 0.0; // URDF <limit velocity> (rad/s or m/s); 0: none given
+  // The step bounds the joint rate: -velocity_limit <= qdot <= velocity_limit at the end of every step, by two
+  // complementarity rows (doc/scenes.md#velocity-limits). Off unless asked for: LoaderOptions::enforce_velocity_limits
+  // or <implicit_sim><joint enforce_velocity_limit>.
+  bool velocity_limited = false;
   double damping = 0.0;        // viscous, N m s/rad or N s/m (URDF <dynamics damping>)
   double friction = 0.0;       // Coulomb, N m or N (URDF <dynamics friction>)
   double initial_position = 0.0;  // rad or m
@@ -82,9 +87,12 @@ struct Joint {
   bool has_coordinate() const { return type != JointType::kFixed && type != JointType::kPlanar; }
   bool mimics() const { return mimic_leader >= 0; }
   int num_equalities() const { return type == JointType::kFixed ? 6 : type == JointType::kPlanar ? 3 : 5; }
-  // Unknowns of the joint in the step NCP: one multiplier per equality, two limit multipliers when limited, the
-  // friction fraction and slip speed when friction > 0, and the mimic multiplier last (mimic_column()).
-  int size() const { return num_equalities() + (limited ? 2 : 0) + (friction > 0.0 ? 2 : 0) + (mimics() ? 1 : 0); }
+  // Unknowns of the joint in the step NCP, in this order: one multiplier per equality, two limit multipliers when
+  // limited, the friction fraction and slip speed when friction > 0, two velocity-limit multipliers when
+  // velocity_limited, and the mimic multiplier last (mimic_column()).
+  int friction_column() const { return num_equalities() + (limited ? 2 : 0); }
+  int velocity_limit_column() const { return friction_column() + (friction > 0.0 ? 2 : 0); }
+  int size() const { return velocity_limit_column() + (velocity_limited ? 2 : 0) + (mimics() ? 1 : 0); }
   int mimic_column() const { return size() - 1; }  // offset of the mimic multiplier in the joint's block
 };
 

@@ -59,6 +59,10 @@ struct LoaderOptions {
   // revolute, continuous or prismatic, not a mimic follower, and the position within its limits (give or take
   // kJointLimitRoundOff). A limited joint given no start anywhere starts at 0, which must then lie within its limits.
   std::map<std::string, double> joint_positions;
+  // true: the step bounds the rate of every joint with a URDF <limit velocity> > 0 to +-velocity (a mimic follower
+  // through its leader); a joint's <implicit_sim><joint enforce_velocity_limit> overrides it. Default off, as Gazebo,
+  // MuJoCo and Drake leave passive joints' rates unbounded (doc/scenes.md#velocity-limits).
+  bool enforce_velocity_limits = false;
   // The loader's notes, one line each (mesh hulls, vendor attributes ignored, mass from geometry, wide revolute
   // ranges) are appended here; null: written to std::cerr.
   std::vector<std::string>* warnings = nullptr;

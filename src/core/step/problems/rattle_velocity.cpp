@@ -296,10 +296,21 @@ void RattleVelocityProblem::AddJointRateRows(const RowContext& ctx) const {
       }
     }
     if (joint.friction > 0.0) {  // the total fraction S
-      const int col = o + m + (joint.limited ? 2 : 0);
+      const int col = o + joint.friction_column();
       const double S = AddJointFrictionRows(ctx, col, rate);
       AddRateRow(ctx, col, G_q, eP, eC, 1.0);
       AddJointForce(ctx, G_q, joint.friction * (S - 0.5 * stage1_z_[col]), col, joint.friction, eP, eC);
+    }
+    if (joint.velocity_limited) {  // the total multipliers: 0 <= U_lo _|_ qdot + v_max >= 0, 0 <= U_hi _|_ v_max - qdot
+      for (int k = 0; k < 2; ++k) {
+        const int col = o + joint.velocity_limit_column() + k;
+        const double sign = k == 0 ? 1.0 : -1.0;
+        const FB fb = FischerBurmeister(z[col] / Fs, joint.velocity_limit + sign * rate, mode.smoothing, mode.raw);
+        ctx.out.Phi[col] = fb.value;
+        if (ctx.out.WantJacobian()) ctx.out.AddJ(col, col, (fb.da + mode.regularization) / Fs);
+        AddRateRow(ctx, col, G_q, eP, eC, sign * fb.db);
+        AddJointForce(ctx, G_q, sign * (z[col] - stage1_z_[col]), col, sign, eP, eC);
+      }
     }
     if (joint.damping > 0.0) AddJointDamping(ctx, joint, 0.5, eP, eC, G_q);
     if (joint.mimics()) {  // qdot - c qdot_leader = 0 along the end-of-step gradients, as the equalities' rates

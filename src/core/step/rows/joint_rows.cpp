@@ -29,6 +29,27 @@ void AddJointLimitRows(const RowContext& ctx, const Joint& joint, int col, const
   AddJointForce(ctx, G_q, -ctx.z[col + 1], col + 1, -1.0, eP, eC);
 }
 
+// 0 <= u_lo _|_ qdot + v_max >= 0 and 0 <= u_hi _|_ v_max - qdot >= 0 at rows col, col + 1 (Joint::velocity_limited):
+// qdot is the joint rate of the velocities that move the bodies over the step (the paper's v_{l+1}, RATTLE's v_{1/2}).
+void AddVelocityLimitRows(const RowContext& ctx, const Joint& joint, int col, const BodyEnd& eP, const BodyEnd& eC,
+                          const JointGradient& G_q) {
+  const double Fs = ctx.Fs();
+  const NcpEvalMode& mode = ctx.out.mode;
+  const double rate = G_q.Rate(eP.v, eP.w, eC.v, eC.w);
+  const FB lo = FischerBurmeister(ctx.z[col] / Fs, rate + joint.velocity_limit, mode.smoothing, mode.raw);
+  const FB hi = FischerBurmeister(ctx.z[col + 1] / Fs, joint.velocity_limit - rate, mode.smoothing, mode.raw);
+  ctx.out.Phi[col] = lo.value;
+  ctx.out.Phi[col + 1] = hi.value;
+  if (ctx.out.WantJacobian()) {
+    ctx.out.AddJ(col, col, (lo.da + mode.regularization) / Fs);
+    ctx.out.AddJ(col + 1, col + 1, (hi.da + mode.regularization) / Fs);
+  }
+  AddRateRow(ctx, col, G_q, eP, eC, lo.db);
+  AddRateRow(ctx, col + 1, G_q, eP, eC, -hi.db);
+  AddJointForce(ctx, G_q, ctx.z[col], col, 1.0, eP, eC);
+  AddJointForce(ctx, G_q, -ctx.z[col + 1], col + 1, -1.0, eP, eC);
+}
+
 // (q - c q_leader - offset) / h = 0 at the end of the step, its multiplier along both joints' start gradients.
 void AddMimicRow(const RowContext& ctx, int j) {
   const Joint& joint = ctx.model().joints[j];
@@ -67,12 +88,13 @@ void AddJointRows(const RowContext& ctx, double share, const std::vector<JointDr
     if (joint.applied_effort != 0.0) AddJointForce(ctx, G_q, share * joint.applied_effort, -1, 0.0, eP, eC);
     if (joint.limited) AddJointLimitRows(ctx, joint, o + m, eP, eC, G_q);
     if (joint.friction > 0.0) {
-      const int col = o + m + (joint.limited ? 2 : 0);
+      const int col = o + joint.friction_column();
       const double s = AddJointFrictionRows(ctx, col, G_q.Rate(eP.v, eP.w, eC.v, eC.w));
       AddRateRow(ctx, col, G_q, eP, eC, 1.0);
       const double bound = share * joint.friction;  // RATTLE stage 1 carries half the step's friction bound
       AddJointForce(ctx, G_q, bound * s, col, bound, eP, eC);
     }
+    if (joint.velocity_limited) AddVelocityLimitRows(ctx, joint, o + joint.velocity_limit_column(), eP, eC, G_q);
     if (joint.damping > 0.0) AddJointDamping(ctx, joint, share, eP, eC, G_q);
     if (joint.mimics()) AddMimicRow(ctx, j);
     if (ctx.layout.driven_joints()[j]) AddDriveRow(ctx, j, drives[j], share, eP, eC, G_q);
