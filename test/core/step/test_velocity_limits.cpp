@@ -17,13 +17,12 @@
 namespace implicit_sim {
 namespace {
 
-constexpr double kRailEffort = 4.0;     // N, on the 2 kg slider: 2 m/s^2
-constexpr double kRailBound = 0.505;    // m/s, reached at 0.2525 s, inside a step of 0.01 s
-constexpr double kRailAccel = 2.0;      // m/s^2
+constexpr double kRailBound = 0.505;  // m/s, reached at 0.2525 s, inside a step of 0.01 s
+constexpr double kRailAccel = 2.0;    // m/s^2: the rail's effort of 4 N on the 2 kg slider
 
 // A 2 kg slider on a horizontal prismatic rail along x, pushed by a constant effort; `entry` adds attributes to the
 // rail's <implicit_sim><joint>.
-std::string Rail(const std::string& entry, const std::string& velocity = "0.505") {
+std::string PushedRail(const std::string& entry, const std::string& velocity = "0.505") {
   return "<robot name='rail'><implicit_sim gravity='0 0 -9.81'><joint name='rail' effort='4' " + entry +
          "/></implicit_sim><link name='world'/><link name='slider'><inertial><mass value='2'/><inertia ixx='0.01' "
          "iyy='0.01' izz='0.01' ixy='0' ixz='0' iyz='0'/></inertial><collision><geometry><box size='0.1 0.1 0.1'/>"
@@ -32,19 +31,19 @@ std::string Rail(const std::string& entry, const std::string& velocity = "0.505"
          "velocity='" + velocity + "'/></joint></robot>";
 }
 
-const StepperOptions::Scheme kSchemes[] = {StepperOptions::Scheme::kRattle, StepperOptions::Scheme::kPaper};
-const char* SchemeName(StepperOptions::Scheme scheme) {
+const StepperOptions::Scheme kBoundedSchemes[] = {StepperOptions::Scheme::kRattle, StepperOptions::Scheme::kPaper};
+const char* BoundedSchemeName(StepperOptions::Scheme scheme) {
   return scheme == StepperOptions::Scheme::kRattle ? "rattle" : "paper";
 }
 
 TEST(VelocityLimits, ASliderPushedAlongItsRailReachesItsBoundAndStaysOnIt) {
-  const Model bounded = LoadSceneFromString(Rail("enforce_velocity_limit='true'"), "rail");
-  const Model free = LoadSceneFromString(Rail(""), "rail");
+  const Model bounded = LoadSceneFromString(PushedRail("enforce_velocity_limit='true'"), "rail");
+  const Model free = LoadSceneFromString(PushedRail(""), "rail");
   ASSERT_TRUE(bounded.joints[0].velocity_limited);
   EXPECT_EQ(bounded.joints[0].velocity_limit, kRailBound);
   EXPECT_FALSE(free.joints[0].velocity_limited);  // off by default
-  for (const StepperOptions::Scheme scheme : kSchemes) {
-    SCOPED_TRACE(SchemeName(scheme));
+  for (const StepperOptions::Scheme scheme : kBoundedSchemes) {
+    SCOPED_TRACE(BoundedSchemeName(scheme));
     StepperOptions options;
     options.scheme = scheme;
     options.h = 0.01;
@@ -85,8 +84,8 @@ TEST(VelocityLimits, APendulumNeverTurnsFasterThanItsBound) {
       "type='continuous'><parent link='world'/><child link='bob'/><origin xyz='0 0 1'/><axis xyz='0 1 0'/><limit "
       "effort='0' velocity='3'/></joint></robot>";
   const Model model = LoadSceneFromString(urdf, "p");
-  for (const StepperOptions::Scheme scheme : kSchemes) {
-    SCOPED_TRACE(SchemeName(scheme));
+  for (const StepperOptions::Scheme scheme : kBoundedSchemes) {
+    SCOPED_TRACE(BoundedSchemeName(scheme));
     StepperOptions options;
     options.scheme = scheme;
     options.h = 0.005;
@@ -114,17 +113,17 @@ TEST(VelocityLimits, APendulumNeverTurnsFasterThanItsBound) {
 TEST(VelocityLimits, TheLoaderDefaultAndEachJointsEntry) {
   LoaderOptions enforce;
   enforce.enforce_velocity_limits = true;
-  EXPECT_TRUE(LoadSceneFromString(Rail(""), "rail", enforce).joints[0].velocity_limited);
-  EXPECT_FALSE(LoadSceneFromString(Rail("enforce_velocity_limit='false'"), "rail", enforce).joints[0].velocity_limited);
+  EXPECT_TRUE(LoadSceneFromString(PushedRail(""), "rail", enforce).joints[0].velocity_limited);
+  EXPECT_FALSE(LoadSceneFromString(PushedRail("enforce_velocity_limit='false'"), "rail", enforce).joints[0].velocity_limited);
   // A joint without a <limit velocity> > 0 has nothing to bound: the default passes over it.
-  EXPECT_FALSE(LoadSceneFromString(Rail("", "0"), "rail", enforce).joints[0].velocity_limited);
+  EXPECT_FALSE(LoadSceneFromString(PushedRail("", "0"), "rail", enforce).joints[0].velocity_limited);
 }
 
 // ~spawn's core (io/scene_edit.h): the addition's <implicit_sim><joint enforce_velocity_limit> keeps its meaning under
 // the prefix.
 TEST(VelocityLimits, AJointsEntryTravelsWithASpawnedRobot) {
   SceneAddition addition;
-  addition.urdf = Rail("enforce_velocity_limit='true'");
+  addition.urdf = PushedRail("enforce_velocity_limit='true'");
   addition.prefix = "r/";
   const Model model = LoadSceneFromString(
       AddToScene("<robot name='w'><link name='world'/></robot>", addition, nullptr), "w");
@@ -135,14 +134,14 @@ TEST(VelocityLimits, AJointsEntryTravelsWithASpawnedRobot) {
 
 TEST(VelocityLimits, TheLoaderRefusesWhatItCannotBound) {
   const std::pair<std::string, std::string> refused[] = {
-      {Rail("enforce_velocity_limit='yes'"),
+      {PushedRail("enforce_velocity_limit='yes'"),
        "<implicit_sim><joint name='rail'> attribute 'enforce_velocity_limit' = 'yes' must be 'true' or 'false'"},
-      {Rail("enforce_velocity_limit='true'", "0"),
+      {PushedRail("enforce_velocity_limit='true'", "0"),
        "<implicit_sim><joint name='rail'> attribute 'enforce_velocity_limit': the joint has no <limit velocity> > 0 "
        "to enforce"},
-      {Rail("enforce_velocity_limit='true' velocity='0.7'"),
+      {PushedRail("enforce_velocity_limit='true' velocity='0.7'"),
        "<implicit_sim><joint name='rail'>: start velocity 0.7 is outside its velocity limit [-0.505, 0.505]"},
-      {Rail("enforce_velocity_limit='true'", "-1"), "<limit> attribute 'velocity' must be >= 0 (0: none)"}};
+      {PushedRail("enforce_velocity_limit='true'", "-1"), "<limit> attribute 'velocity' must be >= 0 (0: none)"}};
   for (const auto& [urdf, message] : refused) {
     try {
       LoadSceneFromString(urdf, "rail");
