@@ -14,7 +14,7 @@ void SemismoothNewton::Resize(int n) {
     J_.resize(n, n);
     normal_.resize(n, n);
     lu_dense_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n);
-    cod_ = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(n, n);
+    full_lu_ = Eigen::FullPivLU<Eigen::MatrixXd>(n, n);
     ldlt_ = Eigen::LDLT<Eigen::MatrixXd>(n);
   }
   Phi_.resize(n);
@@ -88,10 +88,12 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
         return dz_.allFinite();
       }
       // A (numerically) singular J, such as a planar body's line contact gives: its LU direction would be huge and
-      // exhaust the line search. The minimum-norm direction leaves the undetermined unknowns where they are.
-      cod_.compute(J_);
+      // exhaust the line search. The full-pivoting LU's basic solution leaves the unknowns its pivoting finds
+      // undetermined where they are (the minimum-norm direction of a complete orthogonal decomposition did the same
+      // at 1.14x P1's step: bench/README.md).
+      full_lu_.compute(J_);
       ++summary_->factorizations;
-      dz_.noalias() = cod_.solve(-Phi_);
+      dz_.noalias() = full_lu_.solve(-Phi_);
       return dz_.allFinite();
     }
     // Levenberg-Marquardt: (J^T J + lambda I) dz = -J^T Phi.

@@ -134,7 +134,7 @@ class SemismoothNewton {
   Eigen::MatrixXd J_, normal_;
   Eigen::VectorXd Phi_, Phi_trial_, z_trial_, rhs_, dz_;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_dense_;
-  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod_;  // a singular dense J's minimum-norm direction
+  Eigen::FullPivLU<Eigen::MatrixXd> full_lu_;  // a singular dense J's basic direction (free unknowns unmoved)
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
   SparseJacobian J_sparse_;
   SparseLu lu_;
