@@ -13,7 +13,7 @@ void SemismoothNewton::Resize(int n) {
   if (!sparse_) {
     J_.resize(n, n);
     normal_.resize(n, n);
-    lu_dense_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n);
+    lu_singular_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n);
     full_lu_ = Eigen::FullPivLU<Eigen::MatrixXd>(n, n);
     ldlt_ = Eigen::LDLT<Eigen::MatrixXd>(n);
   }
@@ -62,14 +62,13 @@ bool SemismoothNewton::CondensedDirection(const Eigen::SparseMatrix<double>& J) 
 
 namespace {
 
-bool DenseLuNearlySingular(const Eigen::PartialPivLU<Eigen::MatrixXd>& lu) {
-  // Eigen's condition estimate runs several triangular solves (a fifth of a small scene's step). A (numerically)
-  // singular matrix leaves a round-off pivot, so where the pivots span less than kPivotSpread the estimate is skipped:
-  // every such matrix among the 1.2 million dense factorizations of test_core passed it (bench/README.md).
-  constexpr double kPivotSpread = 1e6, kConditionBound = 1e-13;
-  const auto pivots = lu.matrixLU().diagonal().cwiseAbs();
-  if (pivots.minCoeff() * kPivotSpread >= pivots.maxCoeff()) return false;
-  return !(lu.rcond() > kConditionBound);
+constexpr double kConditionBound = 1e-13;  // a reciprocal condition number below it counts as singular
+
+bool DenseLuNearlySingular(DenseLu* lu) {
+  // The condition estimate runs several triangular solves (a fifth of a small scene's step). A (numerically) singular
+  // matrix leaves a tiny pivot, so where the pivots span less than 1e6 the estimate is skipped: every such matrix among
+  // the 1.2 million dense factorizations of test_core passed it (bench/README.md).
+  return lu->PivotRatio() < 1e-6 && !(lu->ConditionEstimate() > kConditionBound);
 }
 
 }  // namespace
@@ -80,11 +79,22 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
     if (!least_squares) {
       // The Newton direction J dz = -Phi by LU with partial pivoting. (The LM normal equations alone square J's
       // condition number, which grows as 1/h; doc/method.md, pitfall 8.)
-      lu_dense_.compute(J_);
+      // Our LU skips the zeros of these mostly-zero matrices (DenseLu).
+      lu_dense_.Factorize(J_);
       ++summary_->factorizations;
       ++summary_->solves;
-      if (!DenseLuNearlySingular(lu_dense_)) {
-        dz_.noalias() = lu_dense_.solve(-Phi_);
+      if (!DenseLuNearlySingular(&lu_dense_)) {
+        dz_ = -Phi_;
+        lu_dense_.Solve(&dz_);
+        return dz_.allFinite();
+      }
+      // Singular in exact arithmetic (a flat face's free closest points): Eigen's blocked LU leaves round-off where
+      // ours has exact zeros, and its estimate often passes such a J. Its direction is kept where it does (the
+      // grippers' box contacts take fewer cold restarts with it than with a direction that leaves them unmoved).
+      lu_singular_.compute(J_);
+      ++summary_->factorizations;
+      if (lu_singular_.rcond() > kConditionBound) {
+        dz_.noalias() = lu_singular_.solve(-Phi_);
         return dz_.allFinite();
       }
       // A (numerically) singular J, such as a planar body's line contact gives: its LU direction would be huge and

@@ -26,6 +26,7 @@
 
 #include "implicit_sim/core/base/interrupt.h"
 #include "implicit_sim/core/ncp/condensed_lu.h"
+#include "implicit_sim/core/ncp/dense_lu.h"
 #include "implicit_sim/core/ncp/ncp_problem.h"
 #include "implicit_sim/core/ncp/ncp_summary.h"
 #include "implicit_sim/core/ncp/sparse_lu.h"
@@ -133,7 +134,8 @@ class SemismoothNewton {
   NcpSummary* summary_ = nullptr;  // of the current solve: evaluation counts
   Eigen::MatrixXd J_, normal_;
   Eigen::VectorXd Phi_, Phi_trial_, z_trial_, rhs_, dz_;
-  Eigen::PartialPivLU<Eigen::MatrixXd> lu_dense_;
+  DenseLu lu_dense_;
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu_singular_;  // where lu_dense_ finds J singular (see Direction)
   Eigen::FullPivLU<Eigen::MatrixXd> full_lu_;  // a singular dense J's basic direction (free unknowns unmoved)
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
   SparseJacobian J_sparse_;
