@@ -16,8 +16,10 @@ IslandSolve::IslandSolve(const Model& model, const std::vector<JointDrive>& driv
 
 IslandSolve::~IslandSolve() = default;
 
-IslandScheme& IslandSolve::SchemeFor(StepperOptions::Scheme kind) {
+IslandScheme& IslandSolve::SchemeFor(const StepperOptions& options) {
+  const StepperOptions::Scheme kind = options.scheme;
   if (!scheme || scheme->scheme() != kind) scheme = MakeIslandScheme(kind, layout, kinematics, drives);
+  scheme->SetFrictionForm(FrictionForm{options.projected_friction, options.friction_projection_scale});
   return *scheme;
 }
 

@@ -233,7 +233,7 @@ bool AdvanceIsland(const IslandStepInputs& in, double h, int depth, IslandSolve*
   const Model& model = *in.model;
   const StepperOptions& options = *in.options;
   State* state = in.state;
-  IslandScheme* scheme = &island->SchemeFor(options.scheme);
+  IslandScheme* scheme = &island->SchemeFor(options);
   StepReport* report = &island->report;
   // A due interrupt abandons the island (and with it the step, which Step then undoes), before a solve and after one.
   const auto interrupted = [&]() {

@@ -20,6 +20,11 @@ struct StepProblems {
         paper(layout, kinematics, drives, regular_separated_friction),
         position(layout, kinematics, drives, regular_separated_friction),
         velocity(layout, kinematics, drives) {}
+  void SetFrictionForm(const FrictionForm& form) {
+    paper.set_friction_form(form);
+    position.set_friction_form(form);
+    velocity.set_friction_form(form);
+  }
   StepLayout layout;
   StepKinematics kinematics;
   std::vector<JointDrive> drives;

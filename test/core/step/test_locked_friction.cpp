@@ -51,12 +51,14 @@ TEST(LockedFriction, ALockedComponentsRowIsItsFraction) {
   rows.slip = rows.sigma_value = 0.7;
   rows.zeta = 1.0 - 0.16 - 0.25 - 0.36;
   rows.locked[1] = true;
+  rows.projected = false;
   NcpEvalMode mode;
   mode.regularization = 1e-9;
   Eigen::VectorXd Phi = Eigen::VectorXd::Zero(4);
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(4, 4);
   const std::vector<char> no_locked_velocities;
-  AddFrictionRows(rows, RowWriter(mode, &Phi, &J, nullptr, no_locked_velocities));
+  const auto no_rate_gradient = [](int, int, double) {};
+  AddFrictionRows(rows, RowWriter(mode, &Phi, &J, nullptr, no_locked_velocities), RateGradient(no_rate_gradient));
   EXPECT_EQ(Phi[1], 0.5);
   EXPECT_EQ(J.row(1), Eigen::RowVector4d(0, 1, 0, 0));
   EXPECT_DOUBLE_EQ(Phi[0], 0.3 + 0.4 * 0.7);

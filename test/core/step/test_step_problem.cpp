@@ -58,11 +58,13 @@ Eigen::VectorXd BeginAtRandomPoint(const Model& model, unsigned seed, const Eige
 void ExpectJacobianMatchesFiniteDifferences(const Model& model, unsigned seed, bool sparse = false,
                                             bool projected = false, double proximal_weight = 0.0,
                                             Stage stage = Stage::kPaper,
-                                            const std::vector<JointDrive>* drives = nullptr) {
+                                            const std::vector<JointDrive>* drives = nullptr,
+                                            const FrictionForm& form = FrictionForm()) {
   NcpEvalMode mode;
   mode.project_multipliers = projected;
   Eigen::VectorXd center;
   StepProblems problems(model, sparse);
+  problems.SetFrictionForm(form);
   const std::vector<PairBlock>& blocks = problems.layout.blocks();
   if (drives) {
     problems.drives = *drives;
@@ -290,6 +292,20 @@ TEST(StepProblemJacobian, VelocityLimitRowsInEveryStage) {
   }
 }
 
+// The paper's bilinear friction rows (StepperOptions::projected_friction = 0), with joint friction and rolling
+// resistance, in every stage, dense and sparse.
+TEST(StepProblemJacobian, BilinearFrictionRowsInEveryStage) {
+  const FrictionForm bilinear{/*projected=*/false, 1.0};
+  for (const Stage stage : {Stage::kPaper, Stage::kRattlePosition, Stage::kRattleVelocity}) {
+    for (const bool sparse : {false, true}) {
+      ExpectJacobianMatchesFiniteDifferences(WithRollingResistance(test_models::SphereOnTwoSpheres(), 0.01), 31, sparse,
+                                             false, 0.0, stage, nullptr, bilinear);
+      ExpectJacobianMatchesFiniteDifferences(test_models::JointedRobot(), 32, sparse, false, 0.0, stage, nullptr,
+                                             bilinear);
+    }
+  }
+}
+
 TEST(StepProblemJacobian, ProjectedMultipliers) {
   ExpectJacobianMatchesFiniteDifferences(test_models::SphereOnTwoSpheres(), 14, true, true);
   ExpectJacobianMatchesFiniteDifferences(test_models::BoxAndSuperellipsoid(), 15, false, true);
@@ -346,8 +362,9 @@ TEST(StepProblem, ProximalTermPerturbsOnlyTheForceAndFrictionRows) {
 
 // The closest-point blocks the sparse solver condenses (NcpProblem::CondensableBlocks) touch only their own unknowns
 // and the velocities of the moving bodies, and the condensed LU of the sparse Jacobian solves like a dense LU of it.
-void ExpectCondensableBlocksAreLocal(const Model& model, unsigned seed) {
+void ExpectCondensableBlocksAreLocal(const Model& model, unsigned seed, const FrictionForm& form) {
   StepProblems problems(model, /*regular_separated_friction=*/true);
+  problems.SetFrictionForm(form);
   const StepProblem& problem = problems.paper;
   const Eigen::VectorXd z = BeginAtRandomPoint(model, seed, nullptr, &problems);
   std::vector<int> starts, indices;
@@ -382,9 +399,15 @@ void ExpectCondensableBlocksAreLocal(const Model& model, unsigned seed) {
 }
 
 TEST(StepProblem, CondensableBlocksTouchOnlyThemselvesAndBodyVelocities) {
-  ExpectCondensableBlocksAreLocal(test_models::SphereOnTwoSpheres(), 21);
-  ExpectCondensableBlocksAreLocal(test_models::BoxAndSuperellipsoid(), 22);
-  ExpectCondensableBlocksAreLocal(test_models::JointedRobot(), 23);
+  for (const bool projected : {true, false}) {
+    SCOPED_TRACE(projected ? "projected friction" : "bilinear friction");
+    // The projected rows at a scale that puts every random pair outside the ball (sliding), where they are regular;
+    // inside, a sticking pair's rows read only its rates, and the jointed robot's are then redundant (rank 262 of 267).
+    const FrictionForm form{projected, 50.0};
+    ExpectCondensableBlocksAreLocal(test_models::SphereOnTwoSpheres(), 21, form);
+    ExpectCondensableBlocksAreLocal(test_models::BoxAndSuperellipsoid(), 22, form);
+    ExpectCondensableBlocksAreLocal(test_models::JointedRobot(), 23, form);
+  }
 }
 
 TEST(StepProblemJacobian, SparseAssemblyWithSeparatedFrictionRows) {
@@ -398,6 +421,7 @@ TEST(StepProblemJacobian, SparseAssemblyWithSeparatedFrictionRows) {
 TEST(StepProblem, FrictionRowsClampANegativeSlipSpeedButRawRowsDoNot) {
   const Model model = test_models::SphereOnTwoSpheres();
   StepProblems problems(model);
+  problems.SetFrictionForm(FrictionForm{/*projected=*/false, 1.0});  // the rows that read sigma
   const StepProblem& problem = problems.paper;
   problems.kinematics.BeginStep(State::Initial(model), 0.01, nullptr);
   std::mt19937 rng(13);

@@ -40,7 +40,7 @@ struct IslandSolve {
   const std::vector<JointDrive>& drives;
   std::unique_ptr<IslandScheme> scheme;
   // The scheme for options.scheme (built anew only when the scheme changes).
-  IslandScheme& SchemeFor(StepperOptions::Scheme kind);
+  IslandScheme& SchemeFor(const StepperOptions& options);
   BlockPredictor predictor;  // StepperOptions::predictor_sweeps
   // --- the warm start (gathered from Data::z) and the workspace of the island's retry ladder and sub-steps ---
   bool has_warm_start = false;

@@ -31,6 +31,10 @@ struct StepperOptions {
   // Newton iterations of the plain warm start of a sparse island of several pairs (retry_ladder.h, rung 1) before the
   // projected one, [1, 1000] (more where its residual is already below 1e-6).
   int sparse_warm_iterations = 8;
+  // The friction rows in the projected form (rows/friction_rows.h; 0: the paper's bilinear rows), 0 or 1, and its
+  // projection scale r (s/m, (0, 1e6]).
+  bool projected_friction = true;
+  double friction_projection_scale = 1.0;
   // The smoothing-path rung (retry_ladder.h, rung 1p) after it, 0 or 1 (an ablation: measured, not kept).
   bool path_following = false;
   // Block Gauss-Seidel sweeps (block_predictor.h) over the pair blocks with the largest residuals, before the warm
@@ -81,7 +85,7 @@ struct OptionRow {
   void (*set)(StepperOptions* options, double value);
 };
 
-constexpr int kNumOptionRows = 25;
+constexpr int kNumOptionRows = 27;
 const std::array<OptionRow, kNumOptionRows>& OptionTable();
 
 // The row with this field, ROS parameter or runner flag; nullptr when none (an empty name finds nothing).

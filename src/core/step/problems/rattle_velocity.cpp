@@ -160,7 +160,6 @@ void RattleVelocityProblem::AddPairRows(const RowContext& ctx, int c) const {
   const Vec3 S = z.segment<3>(off + pi::kSt);
   const double Fs = ctx.Fs();
   const bool closed = closed_[c] != 0;
-  const double on = closed ? 1.0 : 0.0;  // an open pair emits the closed rows' entries as zeros
   // coeff * (u^T d(v_rel)/d(nu) + u_w^T d(w_rel)/d(nu)) on `row`, at the fixed levers.
   auto add_rates = [&](int row, double coeff, const Vec3& u, const Vec3& u_w) {
     if (!want_J) return;
@@ -185,34 +184,21 @@ void RattleVelocityProblem::AddPairRows(const RowContext& ctx, int c) const {
   for (int k = 0; k < friction.count; ++k) {  // a component on locked velocities only: s_k = 0 (friction_rows.h)
     friction.locked[k] = closed && FrictionComponentLocked(ctx.layout, e1, dirs[k], r1.cross(dirs[k]) + dirs_w[k], e2,
                                                            dirs[k], r2.cross(dirs[k]) + dirs_w[k]);
-    add_rates(friction.Row(k), friction.locked[k] ? 0.0 : on * e[k], dirs[k], dirs_w[k]);
+    friction.rate[k] = e[k] * rates[k];
+    friction.s[k] = z[friction.Row(k)];
   }
-  if (closed) {  // the friction of the total: e_k rate_k + S_k sigma = 0, 0 <= sigma _|_ 1 - |S|^2 >= 0
-    friction.sigma = blk.sigma();
-    friction.sigma_value = sigma;
-    for (int k = 0; k < friction.count; ++k) {
-      friction.rate[k] = e[k] * rates[k];
-      friction.s[k] = z[friction.Row(k)];
-    }
-    friction.slip = ProjectedSlip(mode, sigma, &friction.dslip_dsigma);
-    friction.zeta = 1.0 - S.squaredNorm();
-    if (blk.rolling) friction.zeta -= friction.s[3] * friction.s[3] + friction.s[4] * friction.s[4];
-    AddFrictionRows(friction, out);
-  } else {  // an open pair keeps stage 1's fractions and slip (the same Jacobian entries)
-    for (int k = 0; k < friction.count; ++k) {
-      const int row = friction.Row(k);
-      out.Phi[row] = z[row] - stage1_z_[row];
-      if (want_J) {
-        out.AddJ(row, row, 1.0);
-        out.AddJ(row, blk.sigma(), 0.0);
-      }
-    }
-    out.Phi[blk.sigma()] = sigma - stage1_z_[blk.sigma()];
-    if (want_J) {
-      out.AddJ(blk.sigma(), blk.sigma(), 1.0);
-      for (int k = 0; k < friction.count; ++k) out.AddJ(blk.sigma(), friction.Row(k), 0.0);
-    }
-  }
+  // The friction of the total: e_k rate_k + S_k sigma = 0, 0 <= sigma _|_ 1 - |S|^2 >= 0 (or its projected form); an
+  // open pair keeps stage 1's fractions and slip, with the same Jacobian entries.
+  friction.sigma = blk.sigma();
+  friction.sigma_value = sigma;
+  friction.slip = ProjectedSlip(mode, sigma, &friction.dslip_dsigma);
+  friction.zeta = 1.0 - S.squaredNorm();
+  if (blk.rolling) friction.zeta -= friction.s[3] * friction.s[3] + friction.s[4] * friction.s[4];
+  friction.projected = ctx.friction.projected;
+  friction.projection_scale = ctx.friction.projection_scale;
+  if (!closed) friction.hold = &stage1_z_;
+  const auto emit_rate = [&](int k, int row, double coeff) { add_rates(row, coeff * e[k], dirs[k], dirs_w[k]); };
+  AddFrictionRows(friction, out, RateGradient(emit_rate));
   // The normal law on the total force: 0 <= Ln / Fs _|_ n . v_rel >= 0 (m/s, like the friction rows: in metres,
   // h (n . v_rel), the tolerance would leave a resting body sinking at tolerance / h).
   if (closed) {
@@ -297,8 +283,7 @@ void RattleVelocityProblem::AddJointRateRows(const RowContext& ctx) const {
     }
     if (joint.friction > 0.0) {  // the total fraction S
       const int col = o + joint.friction_column();
-      const double S = AddJointFrictionRows(ctx, col, rate);
-      AddRateRow(ctx, col, G_q, eP, eC, 1.0);
+      const double S = AddJointFrictionRows(ctx, col, G_q, eP, eC);
       AddJointForce(ctx, G_q, joint.friction * (S - 0.5 * stage1_z_[col]), col, joint.friction, eP, eC);
     }
     if (joint.velocity_limited) {  // the total multipliers: 0 <= U_lo _|_ qdot + v_max >= 0, 0 <= U_hi _|_ v_max - qdot

@@ -15,7 +15,7 @@ bool StepProblem::IsComplementarityRow(int row, double* scale) const {
 void StepProblem::EvaluateInto(const Eigen::VectorXd& z, const RowWriter& out) const {
   EndsOf(z, &ends_);
   out.Phi.setZero(size());
-  AddRows(RowContext{layout_, kinematics_, ends_, z, out});
+  AddRows(RowContext{layout_, kinematics_, ends_, z, out, friction_form_});
   out.Finish(z);
 }
 

@@ -219,8 +219,6 @@ void AddContactRows(const RowContext& ctx, int c, const ContactRowOptions& optio
   friction.locked[0] = locked_along(t, t0);
   friction.locked[1] = locked_along(o, o0);
   friction.locked[2] = locked_about(n_bar);
-  const double on_t = friction.locked[0] ? 0.0 : 1.0, on_o = friction.locked[1] ? 0.0 : 1.0,
-               on_r = friction.locked[2] ? 0.0 : 1.0;
   // Rolling resistance: e_roll (t_bar . w_rel) + s_q1 slip = 0 and likewise about o_bar (the averaged frame, as n_bar).
   const bool rolling = blk.rolling > 0;
   const Vec3 t_bar = end_weight * t + start_weight * t0, o_bar = end_weight * o + start_weight * o0;
@@ -240,27 +238,32 @@ void AddContactRows(const RowContext& ctx, int c, const ContactRowOptions& optio
   const double cp = mode.raw ? 0.0 : mode.proximal_weight;
   friction.proximal_weight = cp;
   if (cp > 0.0) friction.proximal_center = mode.proximal_center;
-  AddFrictionRows(friction, out);
-  const int rt = off + pi::kSt, ro = off + pi::kSo, rr = off + pi::kSr;
-  if (want_J) {
-    add(rt, off + pi::kN, Eigen::RowVector3d(on_t * end_weight * fr.e_t * v_rel.transpose() * dt_dn));
-    add(ro, off + pi::kN, Eigen::RowVector3d(on_o * end_weight * fr.e_o * v_rel.transpose() * do_dn));
-    add(rr, off + pi::kN, Eigen::RowVector3d(on_r * end_weight * fr.e_r * w_rel.transpose()));
-    add_rel_velocity(rt, on_t * end_weight * fr.e_t, t, on_t * start_weight * fr.e_t, t0);
-    add_rel_velocity(ro, on_o * end_weight * fr.e_o, o, on_o * start_weight * fr.e_o, o0);
-    if (e1.col >= 0) add(rr, e1.col + 3, Eigen::RowVector3d(on_r * fr.e_r * n_bar.transpose()));
-    if (e2.col >= 0) add(rr, e2.col + 3, Eigen::RowVector3d(-on_r * fr.e_r * n_bar.transpose()));
-    if (rolling) {
-      const Vec3 axes[2] = {t_bar, o_bar};
-      const Mat3* daxis_dn[2] = {&dt_dn, &do_dn};
-      for (int k = 0; k < 2; ++k) {
-        const double on = friction.locked[3 + k] ? 0.0 : 1.0;
-        add(rq + k, off + pi::kN, Eigen::RowVector3d(on * end_weight * fr.e_roll * w_rel.transpose() * *daxis_dn[k]));
-        if (e1.col >= 0) add(rq + k, e1.col + 3, Eigen::RowVector3d(on * fr.e_roll * axes[k].transpose()));
-        if (e2.col >= 0) add(rq + k, e2.col + 3, Eigen::RowVector3d(-on * fr.e_roll * axes[k].transpose()));
-      }
+  // coeff times the gradient of rate_k (its frame and velocity derivatives) into `row`.
+  const Vec3 t_bar_axes[2] = {t_bar, o_bar};
+  const Mat3* daxis_dn[2] = {&dt_dn, &do_dn};
+  const auto emit_rate = [&](int k, int row, double coeff) {
+    if (!want_J) return;
+    if (k == 0) {
+      add(row, off + pi::kN, Eigen::RowVector3d(coeff * end_weight * fr.e_t * v_rel.transpose() * dt_dn));
+      add_rel_velocity(row, coeff * end_weight * fr.e_t, t, coeff * start_weight * fr.e_t, t0);
+    } else if (k == 1) {
+      add(row, off + pi::kN, Eigen::RowVector3d(coeff * end_weight * fr.e_o * v_rel.transpose() * do_dn));
+      add_rel_velocity(row, coeff * end_weight * fr.e_o, o, coeff * start_weight * fr.e_o, o0);
+    } else if (k == 2) {
+      add(row, off + pi::kN, Eigen::RowVector3d(coeff * end_weight * fr.e_r * w_rel.transpose()));
+      if (e1.col >= 0) add(row, e1.col + 3, Eigen::RowVector3d(coeff * fr.e_r * n_bar.transpose()));
+      if (e2.col >= 0) add(row, e2.col + 3, Eigen::RowVector3d(-coeff * fr.e_r * n_bar.transpose()));
+    } else {  // the rolling about t_bar (k = 3) or o_bar (k = 4)
+      const Vec3& axis = t_bar_axes[k - 3];
+      add(row, off + pi::kN, Eigen::RowVector3d(coeff * end_weight * fr.e_roll * w_rel.transpose() * *daxis_dn[k - 3]));
+      if (e1.col >= 0) add(row, e1.col + 3, Eigen::RowVector3d(coeff * fr.e_roll * axis.transpose()));
+      if (e2.col >= 0) add(row, e2.col + 3, Eigen::RowVector3d(-coeff * fr.e_roll * axis.transpose()));
     }
-  }
+  };
+  friction.projected = ctx.friction.projected;
+  friction.projection_scale = ctx.friction.projection_scale;
+  friction.separation = options.regular_separated_friction ? std::max(d, 0.0) / h : 0.0;
+  AddFrictionRows(friction, out, RateGradient(emit_rate));
 
   // Non-penetration (paper eq. 11 with the signed distance d as gap): ln / Fs _|_ d.
   // With the proximal term the gap side reads d + cp h (ln - ln_c) / Fs (a velocity weight times the step: metres).

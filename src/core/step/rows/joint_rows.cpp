@@ -89,8 +89,7 @@ void AddJointRows(const RowContext& ctx, double share, const std::vector<JointDr
     if (joint.limited) AddJointLimitRows(ctx, joint, o + m, eP, eC, G_q);
     if (joint.friction > 0.0) {
       const int col = o + joint.friction_column();
-      const double s = AddJointFrictionRows(ctx, col, G_q.Rate(eP.v, eP.w, eC.v, eC.w));
-      AddRateRow(ctx, col, G_q, eP, eC, 1.0);
+      const double s = AddJointFrictionRows(ctx, col, G_q, eP, eC);
       const double bound = share * joint.friction;  // RATTLE stage 1 carries half the step's friction bound
       AddJointForce(ctx, G_q, bound * s, col, bound, eP, eC);
     }
@@ -101,17 +100,21 @@ void AddJointRows(const RowContext& ctx, double share, const std::vector<JointDr
   }
 }
 
-double AddJointFrictionRows(const RowContext& ctx, int col, double rate) {
+double AddJointFrictionRows(const RowContext& ctx, int col, const JointGradient& G_q, const BodyEnd& eP,
+                            const BodyEnd& eC) {
   FrictionRows friction;
   friction.first_row = col;
   friction.count = 1;
   friction.sigma = col + 1;
-  friction.rate[0] = rate;  // the end-of-step joint velocity (rad/s or m/s)
+  friction.rate[0] = G_q.Rate(eP.v, eP.w, eC.v, eC.w);  // the end-of-step joint velocity (rad/s or m/s)
   friction.s[0] = ctx.z[col];
   friction.sigma_value = ctx.z[col + 1];
   friction.slip = ctx.z[col + 1];
   friction.zeta = 1.0 - friction.s[0] * friction.s[0];
-  AddFrictionRows(friction, ctx.out);
+  friction.projected = ctx.friction.projected;
+  friction.projection_scale = ctx.friction.projection_scale;
+  const auto emit_rate = [&](int, int row, double coeff) { AddRateRow(ctx, row, G_q, eP, eC, coeff); };
+  AddFrictionRows(friction, ctx.out, RateGradient(emit_rate));
   return friction.s[0];
 }
 

@@ -27,6 +27,8 @@ class StepProblem : public NcpProblem {
   }
   const StepLayout& layout() const { return layout_; }
   const StepKinematics& kinematics() const { return kinematics_; }
+  // How the friction rows are written (the projected form by default).
+  void set_friction_form(const FrictionForm& form) { friction_form_ = form; }
 
   int size() const override { return layout_.size(); }
   int pattern_version() const override { return layout_.pattern_version(); }
@@ -69,6 +71,7 @@ class StepProblem : public NcpProblem {
   void EvaluateInto(const Eigen::VectorXd& z, const RowWriter& out) const;
   const StepLayout& layout_;
   const StepKinematics& kinematics_;
+  FrictionForm friction_form_;
   mutable std::vector<BodyEnd> ends_;  // the current iterate's bodies at the end of the step (a cache)
 };
 

@@ -1,15 +1,23 @@
 // The Coulomb friction rows, one emitter for contact friction (three components: t, o and the torsion r; five with
-// rolling resistance: the rolling about t and o) and joint friction (one component), in every problem of the step
-// (paper eq. 10 with its typo fixed, divided by mu e ln so that it stays regular at ln = 0; doc/method.md):
-//   slip rows        rate_k + s_k slip = 0                        (k < count; rate_k = e_k times the sliding rate)
-//   ellipsoid row    FB(sigma, zeta) = 0,  zeta = 1 - sum s_k^2   (sigma _|_ the friction ellipsoid, paper eq. 5)
-// slip is the slip speed sigma as the rows read it (ProjectedSlip; plus max(d, 0) / h with the separated-friction
-// regularization). The derivatives of rate_k by the velocities, the normal and the closest points depend on the
-// frame and are emitted by the caller (times 0 for a locked component).
+// rolling resistance: the rolling about t and o) and joint friction (one component), in every problem of the step.
+// Paper eq. 10 (its typo fixed) divided by mu e ln so that it stays regular at ln = 0, with the fractions s_k
+// (friction force mu e_k ln s_k) and the slip speed sigma, in one of two forms with the same solutions:
+//   bilinear (the paper's rows; also every form's raw rows, which the error check and Ipopt read):
+//     slip rows        rate_k + s_k slip = 0                        (k < count; rate_k = e_k times the sliding rate)
+//     ellipsoid row    FB(sigma, zeta) = 0,  zeta = 1 - sum s_k^2   (sigma _|_ the friction ellipsoid, paper eq. 5)
+//   projected (the default; the projection equations of Alart and Curnier in the fractions):
+//     slip rows        s - P(y) = 0,  y = s (1 - r g) - r rate      (P: the projection onto the unit ball)
+//     slip-speed row   sigma + s . rate + g |s|^2 = 0
+// slip is sigma as the rows read it (ProjectedSlip) plus the separation rate g = max(d, 0) / h of the separated-friction
+// regularization; r > 0 is the projection scale (s/m). Sliding, both give s = -rate / |rate| and sigma = |rate| - g;
+// sticking, rate + g s = 0 and sigma = 0. Newton on the bilinear rows can stall at a pair that slides with its friction
+// strictly inside the ellipsoid (sigma > 0, |s| < 1), a point the projected rows do not have (doc/method.md, "Landing
+// steps"). The projected rows couple every component's rate into every slip row: the caller emits the rates' gradients
+// (by the velocities, the normal and the closest points) through a RateGradient, in the same order in every form.
 // A locked component (FrictionComponentLocked: its rate reads only locked velocities, a planar body's out-of-plane
-// friction) has the slip row s_k = 0 instead: the locks carry that force. Its fraction would otherwise be free while
-// the contact sticks (a singular Newton matrix at every step of a planar scene) and would take a share of the
-// ellipsoid that belongs to the free directions.
+// friction) has the slip row s_k = 0 instead and is left out of the ball: the locks carry that force. Its fraction
+// would otherwise be free while the contact sticks (a singular Newton matrix at every step of a planar scene) and
+// would take a share of the ellipsoid that belongs to the free directions.
 #pragma once
 
 #include <Eigen/Core>
@@ -41,14 +49,36 @@ struct FrictionRows {
   // unknown vector, read at Row(k)).
   double proximal_weight = 0.0;
   const Eigen::VectorXd* proximal_center = nullptr;
+  // The projected form (see AddFrictionRows): its switch, the projection scale r (s/m) and the separation rate
+  // g = max(d, 0) / h of a separated pair (the part of `slip` beyond sigma; 0 without the regularization).
+  bool projected = false;
+  double projection_scale = 1.0;
+  double separation = 0.0;
+  // RATTLE stage 2's open pair: every row holds its unknown at (*hold)[row] (s_k and sigma), with the same entries.
+  const Eigen::VectorXd* hold = nullptr;
   int Row(int k) const { return k < 3 ? first_row + k : roll_row + (k - 3); }
+};
+
+// Emits coeff times the gradient of rate_k into `row` (the caller knows the rates' frame derivatives). A non-owning
+// reference to the caller's callable: no allocation.
+class RateGradient {
+ public:
+  template <typename F>
+  explicit RateGradient(const F& f)
+      : object_(&f), call_([](const void* o, int k, int row, double c) { (*static_cast<const F*>(o))(k, row, c); }) {}
+  void operator()(int k, int row, double coeff) const { call_(object_, k, row, coeff); }
+
+ private:
+  const void* object_;
+  void (*call_)(const void*, int, int, double);
 };
 
 // The slip speed of NcpEvalMode::project_multipliers: max(sigma, 0) on the slip rows (equal at every solution), so
 // that a negative iterate does not make friction push along the slip; the raw rows keep sigma. derivative: 0 or 1.
 double ProjectedSlip(const NcpEvalMode& mode, double sigma, double* derivative);
 
-void AddFrictionRows(const FrictionRows& rows, const RowWriter& out);
+// The rows above for one set of fractions; every form and mode emits the same Jacobian entries in the same order.
+void AddFrictionRows(const FrictionRows& rows, const RowWriter& out, const RateGradient& rate_gradient);
 
 // Whether a friction component's rate reads only locked velocities (Body::locked; a fixed body's count as locked):
 // per body end e_i, the rate's derivative by its linear velocity is along v_i and by its angular velocity along w_i

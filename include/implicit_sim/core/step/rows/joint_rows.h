@@ -44,8 +44,9 @@ void AddJointForce(const RowContext& ctx, const JointGradient& g, double force, 
 // Viscous damping -share c qdot along G_q, implicit in the end-of-step velocities.
 void AddJointDamping(const RowContext& ctx, const Joint& joint, double share, const BodyEnd& eP, const BodyEnd& eC,
                      const JointGradient& G_q);
-// The Coulomb friction rows of a joint at rows col, col + 1 for the joint rate `rate` (the caller emits the rate's
-// Jacobian); returns the friction fraction s.
-double AddJointFrictionRows(const RowContext& ctx, int col, double rate);
+// The Coulomb friction rows of a joint at rows col, col + 1 for its end-of-step rate along G_q; returns the friction
+// fraction s.
+double AddJointFrictionRows(const RowContext& ctx, int col, const JointGradient& G_q, const BodyEnd& eP,
+                            const BodyEnd& eC);
 
 }  // namespace implicit_sim

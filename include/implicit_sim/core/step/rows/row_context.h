@@ -12,12 +12,20 @@
 
 namespace implicit_sim {
 
+// How the friction rows are written (rows/friction_rows.h): projected, with the projection scale r (s/m), or the
+// paper's bilinear rows. StepperOptions::projected_friction and friction_projection_scale.
+struct FrictionForm {
+  bool projected = true;
+  double projection_scale = 1.0;
+};
+
 struct RowContext {
   const StepLayout& layout;
   const StepKinematics& kinematics;
   const std::vector<BodyEnd>& ends;  // per entry of layout.bodies()
   const Eigen::VectorXd& z;
   const RowWriter& out;
+  const FrictionForm& friction;
   const Model& model() const { return layout.model(); }
   double h() const { return kinematics.h(); }
   double Fs() const { return kinematics.force_scale(); }

@@ -35,6 +35,8 @@ class IslandScheme {
  public:
   virtual ~IslandScheme() = default;
   virtual StepperOptions::Scheme scheme() const = 0;
+  // How every problem of the scheme writes its friction rows.
+  virtual void SetFrictionForm(const FrictionForm& form) = 0;
   // The problem whose solution in IslandSolve::z gives the end-of-step poses (the retry ladder solves it).
   virtual StepProblem& pose_problem() = 0;
   virtual NewtonSolvers& pose_solvers() = 0;

@@ -11,6 +11,7 @@ class PaperScheme final : public IslandScheme {
  public:
   PaperScheme(const StepLayout& layout, const StepKinematics& kinematics, const std::vector<JointDrive>& drives);
   StepperOptions::Scheme scheme() const override { return StepperOptions::Scheme::kPaper; }
+  void SetFrictionForm(const FrictionForm& form) override { problem_.set_friction_form(form); }
   StepProblem& pose_problem() override { return problem_; }
   NewtonSolvers& pose_solvers() override { return solvers_; }
   void BeginStep(IslandSolve*) override {}

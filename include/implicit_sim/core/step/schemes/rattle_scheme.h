@@ -20,6 +20,11 @@ class RattleScheme final : public IslandScheme {
  public:
   RattleScheme(const StepLayout& layout, const StepKinematics& kinematics, const std::vector<JointDrive>& drives);
   StepperOptions::Scheme scheme() const override { return StepperOptions::Scheme::kRattle; }
+  void SetFrictionForm(const FrictionForm& form) override {
+    position_.set_friction_form(form);
+    velocity_.set_friction_form(form);
+    paper_.SetFrictionForm(form);
+  }
   StepProblem& pose_problem() override { return position_; }
   NewtonSolvers& pose_solvers() override { return position_solvers_; }
   void BeginStep(IslandSolve* island) override;
