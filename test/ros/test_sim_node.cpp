@@ -193,7 +193,7 @@ TEST(SimNode, StepStatsMarkersBodyStatesAndDiagnosticsArePublished) {
   EXPECT_TRUE(stats->converged);
   EXPECT_EQ(stats->status, "converged");
   EXPECT_GT(stats->iterations, 0u);
-  EXPECT_LE(stats->residual, 1e-12);
+  EXPECT_LE(stats->residual, 1e-10);  // the bar is 1e-12 (1 + |z|_inf); P3's largest unknown is O(10)
   const auto markers = ros::topic::waitForMessage<visualization_msgs::MarkerArray>(kNs + "markers", ros::Duration(10));
   ASSERT_TRUE(markers != nullptr);
   int shapes = 0, contact_points = 0;

@@ -19,7 +19,11 @@ IslandSolve::~IslandSolve() = default;
 IslandScheme& IslandSolve::SchemeFor(const StepperOptions& options) {
   const StepperOptions::Scheme kind = options.scheme;
   if (!scheme || scheme->scheme() != kind) scheme = MakeIslandScheme(kind, layout, kinematics, drives);
-  scheme->SetFrictionForm(FrictionForm{options.projected_friction, options.friction_projection_scale});
+  // The projected friction rows where the sparse LU solves (piles); a dense island's resting contacts make its matrix
+  // singular under them, and the dense singular direction is costly (doc/method.md).
+  const bool sparse = layout.size() > NewtonSolvers::kDenseSizeLimit;
+  const bool projected = options.projected_friction == 2 || (options.projected_friction == 1 && sparse);
+  scheme->SetFrictionForm(FrictionForm{projected, options.friction_projection_scale});
   return *scheme;
 }
 

@@ -31,9 +31,10 @@ struct StepperOptions {
   // Newton iterations of the plain warm start of a sparse island of several pairs (retry_ladder.h, rung 1) before the
   // projected one, [1, 1000] (more where its residual is already below 1e-6).
   int sparse_warm_iterations = 8;
-  // The friction rows in the projected form (rows/friction_rows.h; 0: the paper's bilinear rows), 0 or 1, and its
-  // projection scale r (s/m, (0, 1e6]).
-  bool projected_friction = true;
+  // Where the friction rows take the projected form (rows/friction_rows.h), [0, 2]: 0 nowhere (the paper's bilinear
+  // rows), 1 on islands the sparse LU solves (more than NewtonSolvers::kDenseSizeLimit unknowns: piles), 2 on every
+  // island; and its projection scale r (s/m, (0, 1e6]). doc/method.md, "The friction rows as projection equations".
+  int projected_friction = 1;
   double friction_projection_scale = 1.0;
   // The smoothing-path rung (retry_ladder.h, rung 1p) after it, 0 or 1 (an ablation: measured, not kept).
   bool path_following = false;

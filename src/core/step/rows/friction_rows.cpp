@@ -76,6 +76,9 @@ void AddFrictionRows(const FrictionRows& rows, const RowWriter& out, const RateG
   const bool bilinear = !rows.projected || mode.raw;
   const bool want_J = out.WantJacobian();
   const bool held = rows.hold != nullptr;
+  // The projected form's pattern couples every fraction, rate and the gap into every row; the bilinear form keeps the
+  // paper's entries (a form has a pattern of its own: StepProblem::pattern_version).
+  const bool coupled = rows.projected;
   const BallProjection p = bilinear || held ? BallProjection() : ProjectFriction(rows);
   // Every form emits the same entries: per slip row, the fractions, sigma, the gap and the rates.
   for (int i = 0; i < n; ++i) {
@@ -91,6 +94,7 @@ void AddFrictionRows(const FrictionRows& rows, const RowWriter& out, const RateG
     if (!locked && cp > 0.0) out.Phi[row] += (bilinear ? cp : r * cp) * (rows.s[i] - (*rows.proximal_center)[row]);
     if (!want_J) continue;
     for (int j = 0; j < n; ++j) {
+      if (!coupled && j != i) continue;
       const double identity = i == j ? 1.0 : 0.0;
       double a = identity;  // a locked row: s_i = 0
       if (!locked && bilinear) a = identity * (rows.slip + mode.regularization + cp);
@@ -105,6 +109,7 @@ void AddFrictionRows(const FrictionRows& rows, const RowWriter& out, const RateG
       out.AddJ(row, rows.gap, c);
     }
     for (int k = 0; k < n; ++k) {
+      if (!coupled && k != i) continue;
       double c = 0.0;
       if (!locked) c = bilinear ? (i == k ? 1.0 : 0.0) : r * p.D[i][k];
       rate_gradient(k, row, c);
@@ -117,6 +122,7 @@ void AddFrictionRows(const FrictionRows& rows, const RowWriter& out, const RateG
     if (!want_J) return;
     out.AddJ(rows.sigma, rows.sigma, 1.0);
     for (int j = 0; j < n; ++j) out.AddJ(rows.sigma, rows.Row(j), 0.0);
+    if (!coupled) return;
     if (rows.gap >= 0) out.AddJ(rows.sigma, rows.gap, 0.0);
     for (int k = 0; k < n; ++k) rate_gradient(k, rows.sigma, 0.0);
     return;
@@ -136,6 +142,7 @@ void AddFrictionRows(const FrictionRows& rows, const RowWriter& out, const RateG
     if (!bilinear) a = rows.locked[j] ? 0.0 : rows.rate[j] + 2.0 * g * rows.s[j];
     out.AddJ(rows.sigma, rows.Row(j), a);
   }
+  if (!coupled) return;
   if (rows.gap >= 0) out.AddJ(rows.sigma, rows.gap, bilinear ? 0.0 : s_norm2 * rows.dslip_dgap);
   for (int k = 0; k < n; ++k) rate_gradient(k, rows.sigma, !bilinear && !rows.locked[k] ? rows.s[k] : 0.0);
 }

@@ -31,7 +31,8 @@ class StepProblem : public NcpProblem {
   void set_friction_form(const FrictionForm& form) { friction_form_ = form; }
 
   int size() const override { return layout_.size(); }
-  int pattern_version() const override { return layout_.pattern_version(); }
+  // The friction form's rows have patterns of their own (rows/friction_rows.h).
+  int pattern_version() const override { return 2 * layout_.pattern_version() + (friction_form_.projected ? 1 : 0); }
   // Raw rows: each complementarity row returns b(z), the function side of its pair (-f_i(a1), -g_j(a2), d, zeta);
   // the variable side a is the unknown with the row's own index (scaled by 1/Fs for forces).
   bool IsComplementarityRow(int row, double* scale) const override;

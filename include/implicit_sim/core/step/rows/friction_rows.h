@@ -5,7 +5,7 @@
 //   bilinear (the paper's rows; also every form's raw rows, which the error check and Ipopt read):
 //     slip rows        rate_k + s_k slip = 0                        (k < count; rate_k = e_k times the sliding rate)
 //     ellipsoid row    FB(sigma, zeta) = 0,  zeta = 1 - sum s_k^2   (sigma _|_ the friction ellipsoid, paper eq. 5)
-//   projected (the default; the projection equations of Alart and Curnier in the fractions):
+//   projected (the projection equations of Alart and Curnier in the fractions; by default on sparse islands):
 //     slip rows        s - P(y) = 0,  y = s (1 - r g) - r rate      (P: the projection onto the unit ball)
 //     slip-speed row   sigma + s . rate + g |s|^2 = 0
 // slip is sigma as the rows read it (ProjectedSlip) plus the separation rate g = max(d, 0) / h of the separated-friction
@@ -13,7 +13,8 @@
 // sticking, rate + g s = 0 and sigma = 0. Newton on the bilinear rows can stall at a pair that slides with its friction
 // strictly inside the ellipsoid (sigma > 0, |s| < 1), a point the projected rows do not have (doc/method.md, "Landing
 // steps"). The projected rows couple every component's rate into every slip row: the caller emits the rates' gradients
-// (by the velocities, the normal and the closest points) through a RateGradient, in the same order in every form.
+// (by the velocities, the normal and the closest points) through a RateGradient. Each form has its own Jacobian
+// pattern (the projected one couples every fraction, rate and the gap into every row), the same in every mode.
 // A locked component (FrictionComponentLocked: its rate reads only locked velocities, a planar body's out-of-plane
 // friction) has the slip row s_k = 0 instead and is left out of the ball: the locks carry that force. Its fraction
 // would otherwise be free while the contact sticks (a singular Newton matrix at every step of a planar scene) and
@@ -77,7 +78,7 @@ class RateGradient {
 // that a negative iterate does not make friction push along the slip; the raw rows keep sigma. derivative: 0 or 1.
 double ProjectedSlip(const NcpEvalMode& mode, double sigma, double* derivative);
 
-// The rows above for one set of fractions; every form and mode emits the same Jacobian entries in the same order.
+// The rows above for one set of fractions; a form emits the same Jacobian entries in the same order in every mode.
 void AddFrictionRows(const FrictionRows& rows, const RowWriter& out, const RateGradient& rate_gradient);
 
 // Whether a friction component's rate reads only locked velocities (Body::locked; a fixed body's count as locked):

@@ -13,7 +13,7 @@
 namespace implicit_sim {
 
 // How the friction rows are written (rows/friction_rows.h): projected, with the projection scale r (s/m), or the
-// paper's bilinear rows. StepperOptions::projected_friction and friction_projection_scale.
+// paper's bilinear rows (IslandSolve::SchemeFor from StepperOptions::projected_friction and friction_projection_scale).
 struct FrictionForm {
   bool projected = true;
   double projection_scale = 1.0;
