@@ -12,7 +12,7 @@ namespace implicit_sim {
 namespace {
 
 // The unknowns of the test: s_0..s_{n-1}, sigma, d, then rate_0..rate_{n-1} (which the caller's rows would compute).
-struct FrictionPoint {
+struct FrictionRowsPoint {
   int count = 3;
   bool locked[FrictionRows::kMaxCount] = {};
   double h = 0.01;  // s
@@ -24,8 +24,8 @@ struct FrictionPoint {
 };
 
 // Rows 0..n-1 the slip rows, n the sigma row; the rate gradients go to the rate columns.
-void Evaluate(const FrictionPoint& p, const Eigen::VectorXd& x, bool projected, bool raw, Eigen::VectorXd* Phi,
-              Eigen::MatrixXd* J) {
+void EvaluateFrictionRows(const FrictionRowsPoint& p, const Eigen::VectorXd& x, bool projected, bool raw,
+                          Eigen::VectorXd* Phi, Eigen::MatrixXd* J) {
   const int n = p.count;
   FrictionRows rows;
   rows.first_row = 0;
@@ -58,19 +58,21 @@ void Evaluate(const FrictionPoint& p, const Eigen::VectorXd& x, bool projected, 
   AddFrictionRows(rows, RowWriter(mode, Phi, J, nullptr, no_locked_velocities), RateGradient(rate_gradient));
 }
 
-void ExpectJacobianMatchesDifferences(const FrictionPoint& p, const Eigen::VectorXd& x) {
+void ExpectFrictionRowsJacobianMatches(const FrictionRowsPoint& p, const Eigen::VectorXd& x) {
   Eigen::VectorXd Phi, Phi_plus, Phi_minus;
   Eigen::MatrixXd J, unused;
-  Evaluate(p, x, true, false, &Phi, &J);
+  EvaluateFrictionRows(p, x, true, false, &Phi, &J);
   const double eps = 1e-6;
   for (int j = 0; j < p.size(); ++j) {
     Eigen::VectorXd plus = x, minus = x;
     plus[j] += eps;
     minus[j] -= eps;
-    Evaluate(p, plus, true, false, &Phi_plus, &unused);
-    Evaluate(p, minus, true, false, &Phi_minus, &unused);
+    EvaluateFrictionRows(p, plus, true, false, &Phi_plus, &unused);
+    EvaluateFrictionRows(p, minus, true, false, &Phi_minus, &unused);
     const Eigen::VectorXd column = (Phi_plus - Phi_minus) / (2.0 * eps);
-    for (int i = 0; i <= p.count; ++i) EXPECT_NEAR(J(i, j), column[i], 1e-6 * (1.0 + std::abs(J(i, j)))) << "row " << i << ", column " << j;
+    for (int i = 0; i <= p.count; ++i) {
+      EXPECT_NEAR(J(i, j), column[i], 1e-6 * (1.0 + std::abs(J(i, j)))) << "row " << i << ", column " << j;
+    }
   }
 }
 
@@ -79,7 +81,7 @@ TEST(FrictionRows, ProjectedJacobianMatchesFiniteDifferences) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   int inside = 0, outside = 0;
   for (int trial = 0; trial < 40; ++trial) {
-    FrictionPoint p;
+    FrictionRowsPoint p;
     p.count = trial % 2 == 0 ? 3 : 5;
     p.locked[1] = trial % 4 == 1;
     p.r = trial % 3 == 0 ? 1.0 : 20.0;
@@ -101,7 +103,7 @@ TEST(FrictionRows, ProjectedJacobianMatchesFiniteDifferences) {
     }
     (norm2 <= 1.0 ? inside : outside)++;
     SCOPED_TRACE("trial " + std::to_string(trial));
-    ExpectJacobianMatchesDifferences(p, x);
+    ExpectFrictionRowsJacobianMatches(p, x);
   }
   EXPECT_GE(inside, 5);
   EXPECT_GE(outside, 5);
@@ -111,7 +113,7 @@ TEST(FrictionRows, ProjectedJacobianMatchesFiniteDifferences) {
 // a point that slides with its friction inside the ellipsoid (the bilinear rows' stall) zeroes the bilinear slip rows
 // but not the projected ones.
 TEST(FrictionRows, BothFormsShareTheirSolutions) {
-  FrictionPoint p;
+  FrictionRowsPoint p;
   p.count = 3;
   Eigen::VectorXd Phi;
   Eigen::MatrixXd J;
@@ -125,9 +127,9 @@ TEST(FrictionRows, BothFormsShareTheirSolutions) {
     sticking << s_stick, 0.0, d, -g * s_stick;
     for (const bool projected : {true, false}) {
       for (const Eigen::VectorXd* x : {&sliding, &sticking}) {
-        Evaluate(p, *x, projected, false, &Phi, &J);
-        EXPECT_LT(Phi.head(4).lpNorm<Eigen::Infinity>(), 1e-15) << (projected ? "projected" : "bilinear") << " d " << d;
-        Evaluate(p, *x, projected, true, &Phi, &J);  // raw rows: the bilinear ones, zeta >= 0 _|_ sigma >= 0
+        EvaluateFrictionRows(p, *x, projected, false, &Phi, &J);
+        EXPECT_LT(Phi.head(4).lpNorm<Eigen::Infinity>(), 1e-15) << (projected ? "projected" : "bilinear") << ", d " << d;
+        EvaluateFrictionRows(p, *x, projected, true, &Phi, &J);  // raw rows: the bilinear ones, zeta >= 0 _|_ sigma >= 0
         EXPECT_LT(Phi.head(3).lpNorm<Eigen::Infinity>(), 1e-15);
         EXPECT_LT(std::abs(std::min(Phi[3], (*x)[3])), 1e-15);
       }
@@ -136,10 +138,10 @@ TEST(FrictionRows, BothFormsShareTheirSolutions) {
   Eigen::VectorXd stalled(p.size());
   const Eigen::Vector3d s_in(0.3, 0.2, 0.1), slip_rate = -0.05 * s_in;  // sigma = 0.05 m/s, |s| < 1
   stalled << s_in, 0.05, 0.0, slip_rate;
-  Evaluate(p, stalled, false, false, &Phi, &J);
+  EvaluateFrictionRows(p, stalled, false, false, &Phi, &J);
   EXPECT_LT(Phi.head(3).lpNorm<Eigen::Infinity>(), 1e-15);  // the bilinear slip rows hold; only the FB row does not
   EXPECT_GT(std::abs(Phi[3]), 1e-3);
-  Evaluate(p, stalled, true, false, &Phi, &J);
+  EvaluateFrictionRows(p, stalled, true, false, &Phi, &J);
   EXPECT_GT(Phi.head(3).lpNorm<Eigen::Infinity>(), 1e-3);  // the projected rows see it in the slip rows themselves
 }
 

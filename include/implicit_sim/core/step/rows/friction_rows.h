@@ -8,11 +8,11 @@
 //   projected (the projection equations of Alart and Curnier in the fractions; by default on sparse islands):
 //     slip rows        s - P(y) = 0,  y = s (1 - r g) - r rate      (P: the projection onto the unit ball)
 //     slip-speed row   sigma + s . rate + g |s|^2 = 0
-// slip is sigma as the rows read it (ProjectedSlip) plus the separation rate g = max(d, 0) / h of the separated-friction
-// regularization; r > 0 is the projection scale (s/m). Sliding, both give s = -rate / |rate| and sigma = |rate| - g;
-// sticking, rate + g s = 0 and sigma = 0. Newton on the bilinear rows can stall at a pair that slides with its friction
-// strictly inside the ellipsoid (sigma > 0, |s| < 1), a point the projected rows do not have (doc/method.md, "Landing
-// steps"). The projected rows couple every component's rate into every slip row: the caller emits the rates' gradients
+// slip is sigma as the rows read it (ProjectedSlip) plus the separation rate g = max(d, 0) / h of the
+// separated-friction regularization; r > 0 is the projection scale (s/m). Sliding, both give s = -rate / |rate| and
+// sigma = |rate| - g; sticking, rate + g s = 0 and sigma = 0. Newton on the bilinear rows can stall at a pair that
+// slides with its friction strictly inside the ellipsoid (sigma > 0, |s| < 1), a point the projected rows do not have
+// (doc/method.md, "The friction rows as projection equations"). The projected rows couple every component's rate into every slip row: the caller emits the rates' gradients
 // (by the velocities, the normal and the closest points) through a RateGradient. Each form has its own Jacobian
 // pattern (the projected one couples every fraction, rate and the gap into every row), the same in every mode.
 // A locked component (FrictionComponentLocked: its rate reads only locked velocities, a planar body's out-of-plane
