@@ -12,9 +12,10 @@
 // separated-friction regularization; r > 0 is the projection scale (s/m). Sliding, both give s = -rate / |rate| and
 // sigma = |rate| - g; sticking, rate + g s = 0 and sigma = 0. Newton on the bilinear rows can stall at a pair that
 // slides with its friction strictly inside the ellipsoid (sigma > 0, |s| < 1), a point the projected rows do not have
-// (doc/method.md, "The friction rows as projection equations"). The projected rows couple every component's rate into every slip row: the caller emits the rates' gradients
-// (by the velocities, the normal and the closest points) through a RateGradient. Each form has its own Jacobian
-// pattern (the projected one couples every fraction, rate and the gap into every row), the same in every mode.
+// (doc/method.md, "The friction rows as projection equations"). The projected rows couple every component's rate
+// into every slip row: the caller emits the rates' gradients (by the velocities, the normal and the closest points)
+// through a RateGradient. Each form has its own Jacobian pattern (the projected one couples every fraction, rate and
+// the gap into every row), the same in every mode.
 // A locked component (FrictionComponentLocked: its rate reads only locked velocities, a planar body's out-of-plane
 // friction) has the slip row s_k = 0 instead and is left out of the ball: the locks carry that force. Its fraction
 // would otherwise be free while the contact sticks (a singular Newton matrix at every step of a planar scene) and
