@@ -239,7 +239,7 @@ void AddContactRows(const RowContext& ctx, int c, const ContactRowOptions& optio
   friction.proximal_weight = cp;
   if (cp > 0.0) friction.proximal_center = mode.proximal_center;
   // coeff times the gradient of rate_k (its frame and velocity derivatives) into `row`.
-  const Vec3 t_bar_axes[2] = {t_bar, o_bar};
+  const Vec3 roll_axes[2] = {t_bar, o_bar};
   const Mat3* daxis_dn[2] = {&dt_dn, &do_dn};
   const auto emit_rate = [&](int k, int row, double coeff) {
     if (!want_J) return;
@@ -254,7 +254,7 @@ void AddContactRows(const RowContext& ctx, int c, const ContactRowOptions& optio
       if (e1.col >= 0) add(row, e1.col + 3, Eigen::RowVector3d(coeff * fr.e_r * n_bar.transpose()));
       if (e2.col >= 0) add(row, e2.col + 3, Eigen::RowVector3d(-coeff * fr.e_r * n_bar.transpose()));
     } else {  // the rolling about t_bar (k = 3) or o_bar (k = 4)
-      const Vec3& axis = t_bar_axes[k - 3];
+      const Vec3& axis = roll_axes[k - 3];
       add(row, off + pi::kN, Eigen::RowVector3d(coeff * end_weight * fr.e_roll * w_rel.transpose() * *daxis_dn[k - 3]));
       if (e1.col >= 0) add(row, e1.col + 3, Eigen::RowVector3d(coeff * fr.e_roll * axis.transpose()));
       if (e2.col >= 0) add(row, e2.col + 3, Eigen::RowVector3d(-coeff * fr.e_roll * axis.transpose()));
