@@ -9,6 +9,7 @@ const char* NcpTerminationName(NcpTermination termination) {
     case NcpTermination::kConverged: return "converged";
     case NcpTermination::kMaxIterations: return "max_iterations";
     case NcpTermination::kNoDescent: return "no_descent";
+    case NcpTermination::kStalled: return "stalled";
     case NcpTermination::kNonFinite: return "non_finite";
     case NcpTermination::kInaccurate: return "inaccurate";
     case NcpTermination::kSolverFailure: return "solver_failure";

@@ -161,6 +161,16 @@ double SemismoothNewton::LineSearch(const NcpProblem& problem, const NewtonOptio
   return 0.0;
 }
 
+bool SemismoothNewton::Stalled(const NewtonOptions& options, int iteration) const {
+  constexpr double kStallRatio = 0.9;
+  const int window = options.stall_window;
+  if (window <= 0 || iteration < window) return false;
+  const auto begin = residuals_.begin();
+  const double before = *std::min_element(begin, begin + iteration - window + 1);
+  const double recent = *std::min_element(begin + iteration - window + 1, begin + iteration + 1);
+  return recent > kStallRatio * before;
+}
+
 void SemismoothNewton::RememberMerit(double merit) {
   history_[history_next_] = merit;
   history_next_ = (history_next_ + 1) % kMaxMemory;
@@ -186,6 +196,10 @@ void SemismoothNewton::BeginSolve(const NcpProblem& problem, const NewtonOptions
     condense_ = condensed_lu_.has_blocks();
   }
   history_count_ = history_next_ = 0;
+  // Grows once to the largest iteration limit (a warm step allocates nothing).
+  if (options.stall_window > 0 && static_cast<int>(residuals_.size()) < options.max_iterations) {
+    residuals_.resize(options.max_iterations);
+  }
   if (options.trace) ++options.trace->solves;
 }
 
@@ -244,6 +258,11 @@ NcpSummary SemismoothNewton::Solve(const NcpProblem& problem, const NewtonOption
       break;
     }
     if (summary.residual <= tolerance()) break;
+    if (options.stall_window > 0) residuals_[summary.iterations] = summary.residual;
+    if (Stalled(options, summary.iterations)) {
+      summary.termination = NcpTermination::kStalled;
+      break;
+    }
     if (InterruptDue(options.interrupt)) {
       summary.termination = NcpTermination::kInterrupted;
       break;

@@ -57,6 +57,11 @@ constexpr std::array<OptionRow, kNumOptionRows> kTable{{
      "the Newton line search accepts a decrease of the largest of the last this many merits (1: monotone)",
      [](const Options& o) { return static_cast<double>(o.newton.line_search_memory); },
      [](Options* o, double x) { o->newton.line_search_memory = static_cast<int>(x); }},
+    {"newton.stall_window", "", "", OptionKind::kInteger, 0.0, 0.0, 1000.0, false, false, "", nullptr,
+     "a Newton solve stops as stalled when its last this many iterations did not get the residual below 0.9 times "
+     "its best before them (0: never)",
+     [](const Options& o) { return static_cast<double>(o.newton.stall_window); },
+     [](Options* o, double x) { o->newton.stall_window = static_cast<int>(x); }},
     {"newton.condense_blocks", "", "", OptionKind::kInteger, 1.0, 0.0, 1.0, false, false, "", nullptr,
      "1: sparse Newton solves condense each pair's closest-point unknowns out of the Newton matrix (Schur complement)",
      [](const Options& o) { return o.newton.condense_blocks ? 1.0 : 0.0; },

@@ -237,6 +237,40 @@ TEST(NcpSemismoothNewton, StopsAtTheIterationLimitFarFromTheSolution) {
   }
 }
 
+// sqrt(1 + z^2) = 0 has no root: the line search keeps accepting steps towards z = 0, where the residual's minimum 1
+// is, and each gains less than the one before.
+class RootlessEquation : public ncp_test::RowNcp {
+ public:
+  RootlessEquation() : RowNcp({0.0}) {}
+
+ protected:
+  double Row(int, const Eigen::VectorXd& z, std::vector<Entry>* gradient) const override {
+    const double value = std::sqrt(1.0 + z[0] * z[0]);
+    *gradient = {{0, z[0] / value}};
+    return value;
+  }
+};
+
+TEST(NcpSemismoothNewton, StopsAsStalledWhenTheResidualMakesNoProgressOverTheWindow) {
+  const Eigen::VectorXd start = Eigen::VectorXd::Constant(1, 2.0);
+  NewtonOptions window;
+  window.stall_window = 30;
+  for (bool sparse : {false, true}) {
+    SCOPED_TRACE(sparse ? "sparse" : "dense");
+    const Solved stalled = SolveWithNewton(RootlessEquation(), start, sparse, window);
+    EXPECT_EQ(stalled.summary.termination, NcpTermination::kStalled) << stalled.summary.BriefReport();
+    EXPECT_FALSE(stalled.summary.converged);
+    EXPECT_GE(stalled.summary.iterations, window.stall_window);
+    EXPECT_LT(stalled.summary.iterations, window.max_iterations);
+    EXPECT_GE(stalled.summary.residual, 1.0);
+    const Solved unlimited = SolveWithNewton(RootlessEquation(), start, sparse);  // stall_window 0 by default
+    EXPECT_NE(unlimited.summary.termination, NcpTermination::kStalled);
+    EXPECT_GT(unlimited.summary.iterations, stalled.summary.iterations);
+    // The window's test is what stopped it: the iterations it cut made less than 10 % progress.
+    EXPECT_GT(unlimited.summary.residual, 0.9 * stalled.summary.residual);
+  }
+}
+
 TEST(NcpSemismoothNewton, ReportsANonFiniteResidualAtTheStart) {
   const ArctanNcp inner;
   const PoisonedNcp problem(inner, Eigen::VectorXd());  // NaN everywhere

@@ -10,6 +10,7 @@ enum class NcpTermination {
   kConverged,      // the residual is within the solver's tolerance
   kMaxIterations,  // the iteration limit was reached first
   kNoDescent,      // no step along the search direction decreased the merit (a stall)
+  kStalled,        // steps were taken, but the residual made no progress over a window (NewtonOptions::stall_window)
   kNonFinite,      // the residual at the iterate is not finite
   kInaccurate,     // the solver reported a solution whose error (ncp_error.h) exceeds the tolerance
   kSolverFailure,  // the solver reported a failure of its own (Ipopt: infeasible, restoration failed, ...)

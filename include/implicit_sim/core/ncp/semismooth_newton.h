@@ -67,6 +67,10 @@ struct NewtonOptions {
   double residual_regularization = 0.0;
   // The line search accepts a step that decreases the largest of the last this many merits (1: monotone), [1, 16].
   int line_search_memory = 10;
+  // A solve stops as stalled (NcpTermination::kStalled) when the best residual of its last stall_window iterations
+  // is above 0.9 times the best one before them: a line search that keeps accepting short steps along a direction
+  // that does not lead to the solution (0: never, the default; doc/method.md, "Stopping stalled solves").
+  int stall_window = 0;
   // NcpEvalMode::project_multipliers for this solve (the retry ladder's rung 1b sets it).
   bool project_multipliers = false;
   // NcpEvalMode::proximal_weight and proximal_center for this solve (the retry ladder's proximal rung; 0: off).
@@ -123,6 +127,8 @@ class SemismoothNewton {
   bool Step(const NcpProblem& problem, const NewtonOptions& options, double merit, int iteration, Eigen::VectorXd* z);
   void Evaluate(const NcpProblem& problem, const Eigen::VectorXd& z, bool jacobian);
   void RememberMerit(double merit);  // into the line search's memory
+  // Whether the residuals of iterations 0..iteration (residuals_) show a stall (NewtonOptions::stall_window).
+  bool Stalled(const NewtonOptions& options, int iteration) const;
   // dz_ from Phi_ and the Jacobian: the LU Newton direction, or with least_squares the Levenberg-Marquardt one.
   bool Direction(const NewtonOptions& options, double merit, bool least_squares);
   // dz_ by the condensed LU (factorized), if accurate (see the definition); false: use the whole matrix's LU.
@@ -134,6 +140,7 @@ class SemismoothNewton {
   NcpSummary* summary_ = nullptr;  // of the current solve: evaluation counts
   Eigen::MatrixXd J_, normal_;
   Eigen::VectorXd Phi_, Phi_trial_, z_trial_, rhs_, dz_;
+  std::vector<double> residuals_;  // of the current solve, by iteration (the stall test)
   DenseLu lu_dense_;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_singular_;  // where lu_dense_ finds J singular (see Direction)
   Eigen::FullPivLU<Eigen::MatrixXd> full_lu_;  // a singular dense J's basic direction (free unknowns unmoved)
