@@ -107,7 +107,9 @@ def wait_for_registration(name, process, timeout=60):
             return
         except rosgraph.MasterError:
             time.sleep(0.02)
-    raise AssertionError("%s did not register with the master within %g s" % (name, timeout))
+    ended = process.poll()
+    raise AssertionError("%s %s" % (name, "ended (status %s) before it registered with the master" % ended
+                                   if ended is not None else "did not register with the master in %g s" % timeout))
 
 
 def stop_process(process):
