@@ -167,6 +167,7 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const 
   const long steps = std::lround(c.duration / c.h);
   double iterations = 0.0, residual_evaluations = 0.0, factorizations = 0.0, solves = 0.0;
   int max_factorizations = 0;
+  double slowest_step_s = 0.0;  // the longest wall time of one step
   WorstSteps worst(dump.worst);
   StepInputs inputs;  // of the current step, when dumping
   std::string stop_reason = "duration";
@@ -192,6 +193,7 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const 
     factorizations += report.factorizations;
     solves += report.solves;
     max_factorizations = std::max(max_factorizations, report.factorizations);
+    slowest_step_s = std::max(slowest_step_s, report.wall_time_s);
     if (summary.wall_s > max_wall_s) {
       stop_reason = i + 1 < steps ? "max_wall" : stop_reason;
       break;
@@ -213,6 +215,7 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const 
       Field("simulated_s", FormatNumber(summary.steps * c.h)),
       Field("wall_s", FormatNumber(summary.wall_s)),
       Field("us_per_step", FormatNumber(us)),
+      Field("slowest_step_s", FormatNumber(slowest_step_s)),
       Field("real_time_factor", FormatNumber(summary.wall_s > 0 ? summary.steps * c.h / summary.wall_s : 0.0)),
       Field("max_penetration", FormatNumber(summary.max_penetration)),
       Field("nonconverged_steps", std::to_string(summary.nonconverged_steps)),

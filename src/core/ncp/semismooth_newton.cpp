@@ -15,6 +15,7 @@ void SemismoothNewton::Resize(int n) {
     normal_.resize(n, n);
     lu_singular_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n);
     full_lu_ = Eigen::FullPivLU<Eigen::MatrixXd>(n, n);
+    column_qr_ = Eigen::ColPivHouseholderQR<Eigen::MatrixXd>(n, n);
     ldlt_ = Eigen::LDLT<Eigen::MatrixXd>(n);
   }
   Phi_.resize(n);
@@ -63,6 +64,8 @@ bool SemismoothNewton::CondensedDirection(const Eigen::SparseMatrix<double>& J) 
 namespace {
 
 constexpr double kConditionBound = 1e-13;  // a reciprocal condition number below it counts as singular
+// From this many unknowns a singular dense J's direction comes from the column-pivoting QR (see Direction).
+constexpr Eigen::Index kColumnQrMinSize = 128;
 
 bool DenseLuNearlySingular(DenseLu* lu) {
   // The condition estimate runs several triangular solves (a fifth of a small scene's step). A (numerically) singular
@@ -97,13 +100,19 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
         dz_.noalias() = lu_singular_.solve(-Phi_);
         return dz_.allFinite();
       }
-      // A (numerically) singular J, such as a planar body's line contact gives: its LU direction would be huge and
-      // exhaust the line search. The full-pivoting LU's basic solution leaves the unknowns its pivoting finds
-      // undetermined where they are (the minimum-norm direction of a complete orthogonal decomposition did the same
-      // at 1.14x P1's step: bench/README.md).
-      full_lu_.compute(J_);
+      // A (numerically) singular J, such as a planar body's line contact or a flat face on a floor gives: its LU
+      // direction would be huge and exhaust the line search. A rank-revealing factorization's basic solution leaves the
+      // unknowns it finds undetermined where they are: the fully pivoted LU's on small islands, the column-pivoting
+      // QR's on large ones, where the LU's search over the whole matrix dominated the step (bench/README.md).
+      if (J_.rows() < kColumnQrMinSize) {
+        full_lu_.compute(J_);
+        ++summary_->factorizations;
+        dz_.noalias() = full_lu_.solve(-Phi_);
+        return dz_.allFinite();
+      }
+      column_qr_.compute(J_);
       ++summary_->factorizations;
-      dz_.noalias() = full_lu_.solve(-Phi_);
+      dz_.noalias() = column_qr_.solve(-Phi_);
       return dz_.allFinite();
     }
     // Levenberg-Marquardt: (J^T J + lambda I) dz = -J^T Phi.

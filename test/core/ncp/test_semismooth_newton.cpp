@@ -115,7 +115,7 @@ LinearNcp SingularAtTheStart() {
   return LinearNcp(M, Eigen::Vector2d(1, -1));
 }
 
-// Dense: the minimum-norm direction of the complete orthogonal decomposition; sparse: the Levenberg-Marquardt one.
+// Dense: the basic direction of the fully pivoted LU; sparse: the Levenberg-Marquardt one.
 TEST(NcpSemismoothNewton, SolvesWhereTheJacobianIsSingular) {
   const LinearNcp problem = SingularAtTheStart();
   const Eigen::VectorXd start = Eigen::Vector2d(0.5, 0);
@@ -140,6 +140,37 @@ TEST(NcpSemismoothNewton, SolvesWhereTheJacobianIsSingular) {
     const double to_first = MaxDifference(s.z, Eigen::Vector2d(0, 1));
     const double to_second = MaxDifference(s.z, Eigen::Vector2d(2, 1));
     EXPECT_LE(std::min(to_first, to_second), 1e-12) << s.z.transpose();
+  }
+}
+
+// 64 uncoupled copies of SingularAtTheStart (128 unknowns): a large island's singular dense J takes the
+// column-pivoting QR's basic direction, and every copy reaches one of its two solutions without an LM fallback.
+TEST(NcpSemismoothNewton, SolvesALargeIslandWhereTheJacobianIsSingular) {
+  constexpr int kCopies = 64;
+  const LinearNcp one = SingularAtTheStart();
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(2 * kCopies, 2 * kCopies);
+  Eigen::VectorXd q(2 * kCopies), start(2 * kCopies);
+  for (int c = 0; c < kCopies; ++c) {
+    M.block<2, 2>(2 * c, 2 * c) = one.M();
+    q.segment<2>(2 * c) = one.q();
+    start.segment<2>(2 * c) = Eigen::Vector2d(0.5, 0);
+  }
+  const LinearNcp problem(M, q);
+  Eigen::VectorXd Phi;
+  Eigen::MatrixXd J;
+  problem.Evaluate(start, NcpEvalMode(), &Phi, &J);
+  ASSERT_EQ(J.col(0), Eigen::VectorXd::Zero(2 * kCopies));
+  NewtonOptions options;
+  options.sparse_regularization = 0.0;
+  const Solved s = SolveWithNewton(problem, start, false, options);
+  EXPECT_TRUE(s.summary.converged) << s.summary.BriefReport();
+  EXPECT_EQ(s.summary.lm_fallbacks, 0);
+  EXPECT_GT(s.summary.factorizations, s.summary.iterations);  // LUs and a decomposition at the singular start
+  for (int c = 0; c < kCopies; ++c) {
+    const Eigen::Vector2d z = s.z.segment<2>(2 * c);
+    const double to_first = MaxDifference(z, Eigen::Vector2d(0, 1));
+    const double to_second = MaxDifference(z, Eigen::Vector2d(2, 1));
+    EXPECT_LE(std::min(to_first, to_second), 1e-12) << "copy " << c << ": " << z.transpose();
   }
 }
 

@@ -5,10 +5,10 @@
 // entries (NcpEvalMode::regularization; the step puts it on its normal-force and friction rows): a proximal term that
 // keeps the system regular where contact forces are redundant (a body resting on several others) while the residual,
 // and so the solution, stays exact. Where a dense J is numerically singular (unknowns that no row determines: the
-// closest points along a line contact of a planar body), the direction is the minimum-norm least-squares solution of
-// J dz = -Phi by a complete orthogonal decomposition (rank-revealing, without squaring J's condition number). If that
-// fails too or its direction does not decrease the merit, the Levenberg-Marquardt normal equations
-// (J^T J + lambda I) dz = -J^T Phi are solved instead (dense or sparse LDL^T).
+// closest points along a line contact of a planar body, or across a flat face), the direction is the basic solution of
+// J dz = -Phi by a rank-revealing factorization (fully pivoted LU, column-pivoting QR on large islands), without
+// squaring J's condition number. If that fails too or its direction does not decrease the merit, the
+// Levenberg-Marquardt normal equations (J^T J + lambda I) dz = -J^T Phi are solved instead (dense or sparse LDL^T).
 // A sparse solve first condenses the problem's local blocks (the step's closest-point unknowns) out of the Newton
 // matrix (condensed_lu.h), and factorizes the whole matrix only when that fails.
 // The workspace is sized once per layout; a dense Solve does not allocate.
@@ -143,7 +143,9 @@ class SemismoothNewton {
   std::vector<double> residuals_;  // of the current solve, by iteration (the stall test)
   DenseLu lu_dense_;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_singular_;  // where lu_dense_ finds J singular (see Direction)
-  Eigen::FullPivLU<Eigen::MatrixXd> full_lu_;  // a singular dense J's basic direction (free unknowns unmoved)
+  // A singular dense J's basic direction (free unknowns unmoved): on small islands, on large ones (see Direction).
+  Eigen::FullPivLU<Eigen::MatrixXd> full_lu_;
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> column_qr_;
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
   SparseJacobian J_sparse_;
   SparseLu lu_;
