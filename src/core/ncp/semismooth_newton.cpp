@@ -5,6 +5,12 @@
 #include <limits>
 
 namespace implicit_sim {
+namespace {
+
+// From this many unknowns a singular dense J's direction comes from the column-pivoting QR (see Direction).
+constexpr Eigen::Index kColumnQrMinSize = 128;
+
+}  // namespace
 
 SemismoothNewton::SemismoothNewton(int n, bool sparse) : sparse_(sparse) { Resize(n); }
 
@@ -14,8 +20,10 @@ void SemismoothNewton::Resize(int n) {
     J_.resize(n, n);
     normal_.resize(n, n);
     lu_singular_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n);
-    full_lu_ = Eigen::FullPivLU<Eigen::MatrixXd>(n, n);
-    column_qr_ = Eigen::ColPivHouseholderQR<Eigen::MatrixXd>(n, n);
+    // Only the singular direction's factorization that this size uses (see Direction).
+    full_lu_ = n < kColumnQrMinSize ? Eigen::FullPivLU<Eigen::MatrixXd>(n, n) : Eigen::FullPivLU<Eigen::MatrixXd>();
+    column_qr_ = n < kColumnQrMinSize ? Eigen::ColPivHouseholderQR<Eigen::MatrixXd>()
+                                      : Eigen::ColPivHouseholderQR<Eigen::MatrixXd>(n, n);
     ldlt_ = Eigen::LDLT<Eigen::MatrixXd>(n);
   }
   Phi_.resize(n);
@@ -64,8 +72,6 @@ bool SemismoothNewton::CondensedDirection(const Eigen::SparseMatrix<double>& J) 
 namespace {
 
 constexpr double kConditionBound = 1e-13;  // a reciprocal condition number below it counts as singular
-// From this many unknowns a singular dense J's direction comes from the column-pivoting QR (see Direction).
-constexpr Eigen::Index kColumnQrMinSize = 128;
 
 bool DenseLuNearlySingular(DenseLu* lu) {
   // The condition estimate runs several triangular solves (a fifth of a small scene's step). A (numerically) singular
@@ -104,15 +110,14 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
       // direction would be huge and exhaust the line search. A rank-revealing factorization's basic solution leaves the
       // unknowns it finds undetermined where they are: the fully pivoted LU's on small islands, the column-pivoting
       // QR's on large ones, where the LU's search over the whole matrix dominated the step (bench/README.md).
+      ++summary_->factorizations;
       if (J_.rows() < kColumnQrMinSize) {
         full_lu_.compute(J_);
-        ++summary_->factorizations;
         dz_.noalias() = full_lu_.solve(-Phi_);
-        return dz_.allFinite();
+      } else {
+        column_qr_.compute(J_);
+        dz_.noalias() = column_qr_.solve(-Phi_);
       }
-      column_qr_.compute(J_);
-      ++summary_->factorizations;
-      dz_.noalias() = column_qr_.solve(-Phi_);
       return dz_.allFinite();
     }
     // Levenberg-Marquardt: (J^T J + lambda I) dz = -J^T Phi.

@@ -143,7 +143,7 @@ class SemismoothNewton {
   std::vector<double> residuals_;  // of the current solve, by iteration (the stall test)
   DenseLu lu_dense_;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_singular_;  // where lu_dense_ finds J singular (see Direction)
-  // A singular dense J's basic direction (free unknowns unmoved): full_lu_ below 128 unknowns, column_qr_ from there.
+  // A singular dense J's basic direction (free unknowns unmoved): full_lu_ on small islands, column_qr_ on large ones.
   Eigen::FullPivLU<Eigen::MatrixXd> full_lu_;
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> column_qr_;
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
