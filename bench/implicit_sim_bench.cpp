@@ -35,13 +35,14 @@ using namespace implicit_sim;
 
 struct Case {
   std::string scenario;  // P1, P2, P3, S1, J1
-  std::string variant;   // P: the scene file; S1: <shape>_n<N>
+  std::string variant;   // P: the scene file; S1: <shape>_n<N>, then _er<M> for a torsional lever other than 0.01 m
   double h = 0.01;       // s
   double duration = 1.0; // s
   std::string scene_file;
   PileShape shape = PileShape::kSphere;
   int n = 0;
   unsigned seed = 42;
+  double e_r = kPileTorsionLever;  // S1: the torsional lever (m; 0: none)
 };
 
 // The paper scenes' sample at a step end (scenario_metrics.h): the first moving body; P3's contacts by pair name.
@@ -151,7 +152,7 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const 
   const std::string scene_path = scenes_dir + "/" + c.scene_file;
   const std::string scene_name =  // as LoadSceneFromFile names it: the file name without ".urdf"
       c.scenario == "S1" ? "s1_" + c.variant : c.scene_file.substr(0, c.scene_file.size() - 5);
-  const std::string urdf = c.scenario == "S1" ? MakePileUrdf(c.n, c.shape, c.seed)
+  const std::string urdf = c.scenario == "S1" ? MakePileUrdf(c.n, c.shape, c.seed, true, PileOrientation::kAligned, 0.0, c.e_r)
                            : dump.worst > 0   ? ReadText(scene_path)
                                               : std::string();
   const Model model = c.scenario == "S1" ? LoadSceneFromString(urdf, scene_name) : LoadSceneFromFile(scene_path);
@@ -300,7 +301,7 @@ void ParseDumpRequest(const std::map<std::string, std::string>& values, int argc
 int main(int argc, char** argv) {
   const char* usage =
       "usage: implicit_sim_bench [--scenario P1|P2|P3|S1|J1] [--shape sphere|ellipsoid] [--n N] [--seed S] "
-      "[--duration T] [--dt H] [--max-wall S] [--scenes-dir DIR] [--dump-worst K --dump-dir DIR] [--set FIELD=VALUE]...";
+      "[--e-r M] [--duration T] [--dt H] [--max-wall S] [--scenes-dir DIR] [--dump-worst K --dump-dir DIR] [--set FIELD=VALUE]...";
   std::map<std::string, std::string> values;
   std::vector<std::pair<const OptionRow*, double>> overrides;  // --set, in the order given
   for (int i = 1; i < argc; ++i) {
@@ -326,7 +327,7 @@ int main(int argc, char** argv) {
     const std::string flag = argv[i];
     const bool known = flag == "--scenario" || flag == "--shape" || flag == "--n" || flag == "--seed" ||
                        flag == "--duration" || flag == "--dt" || flag == "--scenes-dir" || flag == "--max-wall" ||
-                       flag == "--dump-worst" || flag == "--dump-dir";
+                       flag == "--dump-worst" || flag == "--dump-dir" || flag == "--e-r";
     if (!known || i + 1 >= argc) {
       std::cerr << "implicit_sim_bench: bad argument '" << flag << "'\n" << usage << "\n";
       return 2;
@@ -343,7 +344,7 @@ int main(int argc, char** argv) {
     if (!values.count("--scenario")) {
       if (values.size() > values.count("--scenes-dir") + values.count("--max-wall") + values.count("--dump-worst") +
                               values.count("--dump-dir")) {
-        throw std::invalid_argument("--shape, --n, --seed, --duration and --dt need --scenario");
+        throw std::invalid_argument("--shape, --n, --seed, --e-r, --duration and --dt need --scenario");
       }
       cases = AllCases();
     } else {
@@ -364,6 +365,10 @@ int main(int argc, char** argv) {
         c.h = 0.005;
         c.duration = 2.0;
         c.variant = shape + "_n" + std::to_string(c.n);
+        if (values.count("--e-r")) {
+          c.e_r = ParseNumber("--e-r", values["--e-r"], 0.0, 1000.0);
+          if (c.e_r != kPileTorsionLever) c.variant += "_er" + FormatNumber(c.e_r);
+        }
         if (values.count("--variant")) throw std::invalid_argument("--variant applies to P1, P2 and P3 only");
       } else {
         bool found = false;
@@ -378,8 +383,8 @@ int main(int argc, char** argv) {
           throw std::invalid_argument("no case " + scenario + " with --variant '" + values["--variant"] + "'");
         }
         if (!found) throw std::invalid_argument("--scenario must be P1, P2, P3, S1 or J1, got '" + scenario + "'");
-        if (values.count("--shape") || values.count("--n") || values.count("--seed")) {
-          throw std::invalid_argument("--shape, --n and --seed apply to --scenario S1 only");
+        if (values.count("--shape") || values.count("--n") || values.count("--seed") || values.count("--e-r")) {
+          throw std::invalid_argument("--shape, --n, --seed and --e-r apply to --scenario S1 only");
         }
       }
       if (values.count("--duration")) c.duration = ParseNumber("--duration", values["--duration"], 1e-6, 1e6);

@@ -110,7 +110,9 @@ std::string MjcfFromModel(const Model& model, const MjcfOptions& options) {
   const FrictionParams friction = SceneFriction(model);
   bool planar = false;
   for (const Body& body : model.bodies) planar = planar || (!body.is_fixed && IsPlanarXZ(body));
-  const std::string contact = "condim=\"" + std::string(planar ? "3" : "4") + "\" friction=\"" +
+  // No torsion (e_r = 0, point contacts) is condim 3, as a planar body's contact (it cannot spin about the normal).
+  const bool torsion = !planar && friction.e_r > 0.0;
+  const std::string contact = "condim=\"" + std::string(torsion ? "4" : "3") + "\" friction=\"" +
                               Numbers({friction.mu, friction.e_r * friction.mu, 0.0}) + "\"";
   std::ostringstream assets, world;
   for (const Body& body : model.bodies) {

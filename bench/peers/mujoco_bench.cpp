@@ -31,13 +31,14 @@ using namespace implicit_sim;
 
 struct Case {
   std::string scenario;  // P1, P2, P3, S1
-  std::string variant;   // P: the scene file's name; S1: <shape>_n<N>
+  std::string variant;   // P: the scene file's name; S1: <shape>_n<N>, then _er<M> (implicit_sim_bench's)
   double h = 0.01;       // s
   double duration = 1.0; // s
   std::string scene_file;
   PileShape shape = PileShape::kSphere;
   int n = 0;
   unsigned seed = 42;
+  double e_r = kPileTorsionLever;  // S1: the torsional lever (m; 0: none, condim 3)
 };
 
 // implicit_sim_bench's cases (AllCases there), in the same order.
@@ -117,7 +118,7 @@ void SetInitialState(MujocoScene* s) {
 
 std::unique_ptr<MujocoScene> LoadScene(const Case& c, const std::string& scenes_dir, const std::string& solver) {
   auto s = std::make_unique<MujocoScene>();
-  s->model = c.scenario == "S1" ? LoadSceneFromString(MakePileUrdf(c.n, c.shape, c.seed), "s1_" + c.variant)
+  s->model = c.scenario == "S1" ? LoadSceneFromString(MakePileUrdf(c.n, c.shape, c.seed, true, PileOrientation::kAligned, 0.0, c.e_r), "s1_" + c.variant)
                                 : LoadSceneFromFile(scenes_dir + "/" + c.scene_file);
   MjcfOptions options;
   options.h = c.h;
@@ -257,10 +258,10 @@ int ParseInteger(const std::string& flag, const std::string& text, double low, d
 
 // The cases the flags select (implicit_sim_bench's rules); throws std::invalid_argument for bad flags.
 std::vector<Case> SelectCases(std::map<std::string, std::string> values) {
-  const bool s1_flags = values.count("--shape") || values.count("--n") || values.count("--seed");
+  const bool s1_flags = values.count("--shape") || values.count("--n") || values.count("--seed") || values.count("--e-r");
   if (!values.count("--scenario")) {
     if (s1_flags || values.count("--duration") || values.count("--dt") || values.count("--variant")) {
-      throw std::invalid_argument("--shape, --n, --seed, --variant, --duration and --dt need --scenario");
+      throw std::invalid_argument("--shape, --n, --seed, --e-r, --variant, --duration and --dt need --scenario");
     }
     return AllCases();
   }
@@ -277,8 +278,12 @@ std::vector<Case> SelectCases(std::map<std::string, std::string> values) {
                                                  : 42u;
     c = Case{"S1", shape + "_n" + std::to_string(n), 0.005, 2.0, "",
              shape == "sphere" ? PileShape::kSphere : PileShape::kEllipsoid, n, seed};
+    if (values.count("--e-r")) {
+      c.e_r = ParseNumber("--e-r", values["--e-r"], 0.0, 1000.0);
+      if (c.e_r != kPileTorsionLever) c.variant += "_er" + FormatNumber(c.e_r);
+    }
   } else {
-    if (s1_flags) throw std::invalid_argument("--shape, --n and --seed apply to --scenario S1 only");
+    if (s1_flags) throw std::invalid_argument("--shape, --n, --seed and --e-r apply to --scenario S1 only");
     bool found = false;
     for (const Case& known : AllCases()) {
       const bool variant_ok = !values.count("--variant") || known.variant == values["--variant"];
@@ -295,7 +300,7 @@ std::vector<Case> SelectCases(std::map<std::string, std::string> values) {
 
 int main(int argc, char** argv) {
   const std::vector<std::string> flags = {"--scenario", "--variant", "--shape",      "--n",         "--seed",
-                                          "--duration", "--dt",      "--max-wall", "--scenes-dir", "--solver"};
+                                          "--duration", "--dt",      "--max-wall", "--scenes-dir", "--solver", "--e-r"};
   std::map<std::string, std::string> values;
   std::vector<Case> cases;
   double max_wall_s = 300.0;  // s of time inside mj_step per run

@@ -1,5 +1,6 @@
 // implicit_sim_make_pile --n N --shape sphere|ellipsoid|bracket|tee [--seed S] [--orientation aligned|random]
-// [--e-roll M] --out FILE: writes the S1 pile scene (with rolling resistance M, in m, on its friction when M > 0).
+// [--e-r M] [--e-roll M] --out FILE: writes the S1 pile scene (torsional lever e_r, in m, default 0.01, 0 for none;
+// rolling resistance M, in m, on its friction when M > 0).
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
@@ -11,11 +12,11 @@
 int main(int argc, char** argv) {
   const char* usage =
       "usage: implicit_sim_make_pile --n N --shape sphere|ellipsoid|bracket|tee [--seed S] "
-      "[--orientation aligned|random] [--e-roll M] --out FILE";
+      "[--orientation aligned|random] [--e-r M] [--e-roll M] --out FILE";
   std::map<std::string, std::string> values;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
-    if ((flag != "--n" && flag != "--shape" && flag != "--seed" && flag != "--orientation" && flag != "--e-roll" &&
+    if ((flag != "--n" && flag != "--shape" && flag != "--seed" && flag != "--orientation" && flag != "--e-roll" && flag != "--e-r" &&
          flag != "--out") ||
         i + 1 >= argc) {
       std::cerr << "implicit_sim_make_pile: bad argument '" << flag << "' (" << usage << ")\n";
@@ -53,11 +54,19 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  double e_r = implicit_sim::kPileTorsionLever;
+  if (values.count("--e-r")) {
+    e_r = std::strtod(values["--e-r"].c_str(), &end);
+    if (values["--e-r"].empty() || *end != '\0' || !(e_r >= 0.0 && e_r <= 1000.0)) {
+      std::cerr << "implicit_sim_make_pile: --e-r must be a number in [0, 1000] m, got '" << values["--e-r"] << "'\n";
+      return 2;
+    }
+  }
   // The generator's std::mt19937 takes the seed modulo 2^32.
   const std::string urdf = implicit_sim::MakePileUrdf(
       static_cast<int>(n), pile_shape, static_cast<unsigned>(seed), true,
       orientation == "random" ? implicit_sim::PileOrientation::kRandom : implicit_sim::PileOrientation::kAligned,
-      e_roll);
+      e_roll, e_r);
   std::ofstream out(values["--out"]);
   out << urdf;
   if (!out) {

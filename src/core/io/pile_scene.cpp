@@ -87,10 +87,10 @@ std::string PartElements(PileShape shape) {
   throw std::invalid_argument("unknown pile shape");
 }
 
-// The pile's URDF with body i at pose X_WB[i] and rolling resistance e_roll (m; 0: none); `random_orientations` only
-// changes the comment.
+// The pile's URDF with body i at pose X_WB[i], the torsional lever e_r and rolling resistance e_roll (m; 0: none);
+// `random_orientations` only changes the comment.
 std::string PileUrdf(int n, PileShape shape, unsigned seed, const std::vector<Pose>& X_WB, int separated_pairs,
-                     double max_shift, double e_roll, bool random_orientations = false) {
+                     double max_shift, double e_r, double e_roll, bool random_orientations = false) {
   const std::string shape_name = PileShapeName(shape);
   std::ostringstream out;
   out << "<?xml version=\"1.0\"?>\n<!-- S1 pile: " << n << " " << shape_name << " parts, seed " << seed
@@ -101,7 +101,8 @@ std::string PileUrdf(int n, PileShape shape, unsigned seed, const std::vector<Po
         << separated_pairs << " bodies moved along x, largest shift " << FormatNumber(max_shift) << " m)";
   }
   out << ". -->\n<robot name=\"s1_pile_" << n << "_" << shape_name << "\">\n"
-      << "  <implicit_sim gravity=\"0 0 -9.81\">\n    <friction mu=\"0.5\" e_t=\"1\" e_o=\"1\" e_r=\"0.01\"";
+      << "  <implicit_sim gravity=\"0 0 -9.81\">\n    <friction mu=\"0.5\" e_t=\"1\" e_o=\"1\" e_r=\""
+      << FormatNumber(e_r) << "\"";
   if (e_roll > 0.0) out << " e_roll=\"" << FormatNumber(e_roll) << "\"";
   out << "/>\n  </implicit_sim>\n  <link name=\"world\"/>\n";
   AddHalfSpace(out, "floor", "0 0 0", "0 0 0");
@@ -209,27 +210,30 @@ int MaxPileSize(PileShape shape) {
 }
 
 std::string MakePileUrdf(int n, PileShape shape, unsigned seed, bool separate_overlaps, PileOrientation orientation,
-                         double e_roll) {
+                         double e_roll, double e_r) {
   if (n < 1 || n > MaxPileSize(shape)) {
     throw std::invalid_argument("pile size n must be in [1, " + std::to_string(MaxPileSize(shape)) + "] for " +
                                 PileShapeName(shape) + " parts (every pair of shapes is stored: " +
                                 "Model::kMaxContactPairs), got " + std::to_string(n));
   }
+  if (!(e_r >= 0.0 && e_r <= 1000.0)) {
+    throw std::invalid_argument("pile e_r must be in [0, 1000] m, got " + FormatNumber(e_r));
+  }
   if (!(e_roll >= 0.0 && e_roll <= 1000.0)) {
     throw std::invalid_argument("pile e_roll must be in [0, 1000] m, got " + FormatNumber(e_roll));
   }
   if (orientation == PileOrientation::kRandom) {
-    return PileUrdf(n, shape, seed, RandomPileLayout(n, seed), 0, 0.0, e_roll, true);
+    return PileUrdf(n, shape, seed, RandomPileLayout(n, seed), 0, 0.0, e_r, e_roll, true);
   }
   std::vector<Pose> X_WB = PileLayout(n, seed);
-  const std::string layout = PileUrdf(n, shape, seed, X_WB, 0, 0.0, e_roll);
+  const std::string layout = PileUrdf(n, shape, seed, X_WB, 0, 0.0, e_r, e_roll);
   if (!separate_overlaps || shape != PileShape::kEllipsoid) return layout;  // only ellipsoids overlap
   const std::vector<Pose> original = X_WB;
   const int separated = SeparateRows(&X_WB, 0.12);
   if (separated == 0) return layout;
   double max_shift = 0.0;
   for (int k = 0; k < n; ++k) max_shift = std::max(max_shift, (X_WB[k].translation() - original[k].translation()).norm());
-  return PileUrdf(n, shape, seed, X_WB, separated, max_shift, e_roll);
+  return PileUrdf(n, shape, seed, X_WB, separated, max_shift, e_r, e_roll);
 }
 
 }  // namespace implicit_sim

@@ -312,7 +312,7 @@ FrictionParams ReadFriction(const tinyxml2::XMLElement* e, const std::string& wh
   f.mu = ReadScalar(e, "mu", where, 0.0, 100.0, false, base.mu, false);
   f.e_t = ReadScalar(e, "e_t", where, 0.0, 1e3, true, base.e_t, false);
   f.e_o = ReadScalar(e, "e_o", where, 0.0, 1e3, true, base.e_o, false);
-  f.e_r = ReadScalar(e, "e_r", where, 0.0, 1e3, true, base.e_r, false);
+  f.e_r = ReadScalar(e, "e_r", where, 0.0, 1e3, false, base.e_r, false);
   f.e_roll = ReadScalar(e, "e_roll", where, 0.0, 1e3, false, base.e_roll, false);
   return f;
 }

@@ -109,7 +109,7 @@ TEST(UrdfLoader, RefusesBadScenesNamingWhatIsWrong) {
   ExpectRefused(Scene(kSphere + std::string("<implicit type='ellipsoid' semi_axes='1 0 1'/>")), "semi_axes");
   ExpectRefused(Scene(kSphere + std::string("<implicit type='sphere' radius='nan'/>")), "radius");
   ExpectRefused(Scene(kSphere, "<implicit_sim><friction mu='-1'/></implicit_sim>"), "'mu'");
-  ExpectRefused(Scene(kSphere, "<implicit_sim><friction e_r='0'/></implicit_sim>"), "'e_r'");
+  ExpectRefused(Scene(kSphere, "<implicit_sim><friction e_r='-0.01'/></implicit_sim>"), "'e_r'");
   ExpectRefused(Scene(kSphere, "<implicit_sim><friction e_roll='-0.001'/></implicit_sim>"), "'e_roll'");
   ExpectRefused(Scene(kSphere, "<implicit_sim><body link='ball' velocity='1 0 0' locked='x'/></implicit_sim>"),
                 "locked axis");

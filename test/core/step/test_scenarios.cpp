@@ -2,6 +2,9 @@
 // run from the scene files in scenes/, with the bars of the README's table. Non-penetration is checked independently of the
 // solver: closed-form lowest points for the discs and the sphere, the Ipopt distance oracle for P3.
 #include <cmath>
+#include <fstream>
+#include <iterator>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -130,6 +133,38 @@ TEST_P(P2SpinningSphere, TorsionalFrictionStopsItLinearly) {
 
 INSTANTIATE_TEST_SUITE_P(PaperAndFineStep, P2SpinningSphere,
                          ::testing::Values(SpinCase{0.07, 1.05}, SpinCase{0.01, 1.00}));
+
+// e_r = 0: point contact without torsional friction (MuJoCo's condim 3). The torsion component leaves the friction
+// ellipsoid, so the sphere spins on at its initial rate while it stays in contact, with no other motion.
+TEST(P2SpinningSphere, WithoutTorsionalFrictionSpinsOn) {
+  std::ifstream file(ScenePath("p2_sphere_spinning.urdf"));
+  std::string urdf((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  const std::string torsion = "e_r=\"0.4\"";
+  ASSERT_NE(urdf.find(torsion), std::string::npos);
+  urdf.replace(urdf.find(torsion), torsion.size(), "e_r=\"0\"");
+  const Model model = LoadSceneFromString(urdf, "p2_no_torsion");
+  ASSERT_EQ(model.pairs[0].friction.e_r, 0.0);
+  for (const double h : {0.07, 0.01}) {
+    SCOPED_TRACE("h = " + std::to_string(h));
+    double max_wz_change = 0.0, max_moment = 0.0, max_ft = 0.0, max_other = 0.0, max_penetration = 0.0;
+    double min_normal_force = 1e300;
+    const RunStats stats = RunScene(model, h, 2.0, [&](const Model&, const State& s, const Data& d, const StepReport&) {
+      max_wz_change = std::max(max_wz_change, std::abs(s.v[5] - 1.962));
+      max_other = std::max(max_other, s.v.head<5>().cwiseAbs().maxCoeff());
+      max_moment = std::max(max_moment, std::abs(d.contacts[0].torsional_moment));
+      max_ft = std::max(max_ft, d.contacts[0].friction_force_W.norm());
+      min_normal_force = std::min(min_normal_force, d.contacts[0].normal_force);
+      max_penetration = std::max(max_penetration, 1.0 - s.q[2]);  // independent: sphere of radius 1 above z = 0
+    });
+    EXPECT_EQ(stats.nonconverged, 0);
+    EXPECT_LE(max_wz_change, 1e-9);
+    EXPECT_LE(max_moment, 1e-9);
+    EXPECT_LE(max_ft, 1e-8);
+    EXPECT_LE(max_other, 1e-8);
+    EXPECT_NEAR(min_normal_force, 9.81, 1e-6);  // m = 1 kg: it rests on the floor throughout
+    EXPECT_LE(max_penetration, 1e-8);
+  }
+}
 
 TEST(P3SphereOnTwoSpheres, EventsVelocityAndNonPenetrationMatchTheReference) {
   const Model model = LoadSceneFromFile(ScenePath("p3_sphere_on_two_spheres.urdf"));
