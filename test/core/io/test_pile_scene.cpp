@@ -198,8 +198,6 @@ TEST(PileScene, BracketsAndTeesAreTwoShapeBodiesThatStartApart) {
   EXPECT_FALSE(ParsePileShape("cube", &unused));
 }
 
-// Rolling resistance on the pile's friction (the batch studies' e_roll): every pair gets it, the layout stays the same,
-// and a value out of range is refused naming the range.
 // The documented pile sizes (launch/pile.launch, implicit_sim_make_pile --n) stay within the model's pair limit: n parts
 // of k shapes over 5 half-spaces form k^2 n (n - 1) / 2 + 5 k n pairs at most.
 TEST(PileScene, TheLargestPilesStayWithinThePairLimitAndLargerOnesAreRefused) {
@@ -221,6 +219,8 @@ TEST(PileScene, TheLargestPilesStayWithinThePairLimitAndLargerOnesAreRefused) {
   EXPECT_EQ(brackets.ContactPairBound(), 4 * 6 * 5 / 2 + 5 * 2 * 6);
 }
 
+// Rolling resistance on the pile's friction (the batch studies' e_roll): every pair gets it, the layout stays the same,
+// and a value out of range is refused naming the range.
 TEST(PileScene, RollingResistanceReachesEveryPairAndBadValuesAreRefused) {
   const Model without = LoadSceneFromString(MakePileUrdf(5, PileShape::kEllipsoid, 3, true, PileOrientation::kRandom), "a");
   const Model with =
@@ -240,6 +240,32 @@ TEST(PileScene, RollingResistanceReachesEveryPairAndBadValuesAreRefused) {
       ADD_FAILURE() << bad << " accepted";
     } catch (const std::invalid_argument& error) {
       EXPECT_NE(std::string(error.what()).find("e_roll must be in [0, 1000] m"), std::string::npos) << error.what();
+    }
+  }
+}
+
+// The torsional lever: 0.01 m unless asked otherwise, 0 (no torsional friction) reaches every pair with the same layout,
+// and a value out of range is refused naming the range.
+TEST(PileScene, TheTorsionalLeverReachesEveryPairAndBadValuesAreRefused) {
+  const Model standard = LoadSceneFromString(MakePileUrdf(5, PileShape::kEllipsoid, 3), "a");
+  const Model point =
+      LoadSceneFromString(MakePileUrdf(5, PileShape::kEllipsoid, 3, true, PileOrientation::kAligned, 0.0, 0.0), "b");
+  ASSERT_EQ(point.pairs.size(), standard.pairs.size());
+  ASSERT_FALSE(point.pairs.empty());
+  for (size_t k = 0; k < point.pairs.size(); ++k) {
+    EXPECT_EQ(standard.pairs[k].friction.e_r, kPileTorsionLever) << k;
+    EXPECT_EQ(point.pairs[k].friction.e_r, 0.0) << k;
+    EXPECT_EQ(point.pairs[k].friction.mu, 0.5) << k;
+  }
+  for (size_t b = 0; b < point.bodies.size(); ++b) {
+    EXPECT_EQ(point.bodies[b].X_WB0.matrix(), standard.bodies[b].X_WB0.matrix()) << b;
+  }
+  for (const double bad : {-0.001, 2000.0, std::nan("")}) {
+    try {
+      MakePileUrdf(5, PileShape::kSphere, 3, true, PileOrientation::kAligned, 0.0, bad);
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const std::invalid_argument& error) {
+      EXPECT_NE(std::string(error.what()).find("e_r must be in [0, 1000] m"), std::string::npos) << error.what();
     }
   }
 }
