@@ -148,7 +148,10 @@ TEST(P2SpinningSphere, WithoutTorsionalFrictionSpinsOn) {
     SCOPED_TRACE("h = " + std::to_string(h));
     double max_wz_change = 0.0, max_moment = 0.0, max_ft = 0.0, max_other = 0.0, max_penetration = 0.0;
     double min_normal_force = 1e300;
-    const RunStats stats = RunScene(model, h, 2.0, [&](const Model&, const State& s, const Data& d, const StepReport&) {
+    int iterations = 0, factorizations = 0;
+    const RunStats stats = RunScene(model, h, 2.0, [&](const Model&, const State& s, const Data& d, const StepReport& r) {
+      iterations += r.iterations;
+      factorizations += r.factorizations;
       max_wz_change = std::max(max_wz_change, std::abs(s.v[5] - 1.962));
       max_other = std::max(max_other, s.v.head<5>().cwiseAbs().maxCoeff());
       max_moment = std::max(max_moment, std::abs(d.contacts[0].torsional_moment));
@@ -163,6 +166,9 @@ TEST(P2SpinningSphere, WithoutTorsionalFrictionSpinsOn) {
     EXPECT_LE(max_other, 1e-8);
     EXPECT_NEAR(min_normal_force, 9.81, 1e-6);  // m = 1 kg: it rests on the floor throughout
     EXPECT_LE(max_penetration, 1e-8);
+    // The Newton matrix stays regular without the torsion: one factorization an iteration (a singular one takes the
+    // singular direction's extra factorizations).
+    EXPECT_EQ(factorizations, iterations);
   }
 }
 
