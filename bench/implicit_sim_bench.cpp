@@ -152,7 +152,8 @@ void Run(const Case& c, const std::string& scenes_dir, double max_wall_s, const 
   const std::string scene_path = scenes_dir + "/" + c.scene_file;
   const std::string scene_name =  // as LoadSceneFromFile names it: the file name without ".urdf"
       c.scenario == "S1" ? "s1_" + c.variant : c.scene_file.substr(0, c.scene_file.size() - 5);
-  const std::string urdf = c.scenario == "S1" ? MakePileUrdf(c.n, c.shape, c.seed, true, PileOrientation::kAligned, 0.0, c.e_r)
+  const std::string urdf = c.scenario == "S1" ? MakePileUrdf(c.n, c.shape, c.seed, true, PileOrientation::kAligned,
+                                                             0.0, c.e_r)
                            : dump.worst > 0   ? ReadText(scene_path)
                                               : std::string();
   const Model model = c.scenario == "S1" ? LoadSceneFromString(urdf, scene_name) : LoadSceneFromFile(scene_path);
@@ -301,7 +302,8 @@ void ParseDumpRequest(const std::map<std::string, std::string>& values, int argc
 int main(int argc, char** argv) {
   const char* usage =
       "usage: implicit_sim_bench [--scenario P1|P2|P3|S1|J1] [--shape sphere|ellipsoid] [--n N] [--seed S] "
-      "[--e-r M] [--duration T] [--dt H] [--max-wall S] [--scenes-dir DIR] [--dump-worst K --dump-dir DIR] [--set FIELD=VALUE]...";
+      "[--e-r M] [--duration T] [--dt H] [--max-wall S] [--scenes-dir DIR] [--dump-worst K --dump-dir DIR] "
+      "[--set FIELD=VALUE]...";
   std::map<std::string, std::string> values;
   std::vector<std::pair<const OptionRow*, double>> overrides;  // --set, in the order given
   for (int i = 1; i < argc; ++i) {

@@ -4,7 +4,8 @@
 // loader and written as MJCF (mjcf_scene.h), so both engines run the same bodies. Only the time inside mj_step counts.
 //   implicit_sim_mujoco_bench                                   every case
 //   implicit_sim_mujoco_bench --scenario P1 --variant p1_ngon100
-//   implicit_sim_mujoco_bench --scenario S1 --shape ellipsoid --n 100 [--duration 2] [--dt 0.005] [--solver CG]
+//   implicit_sim_mujoco_bench --scenario S1 --shape ellipsoid --n 100 [--e-r M] [--duration 2] [--dt 0.005]
+//                             [--solver CG]
 // Flags and fields: bench/README.md#side-by-side-with-mujoco. Bad arguments: exit 2 and one line on stderr.
 #include <algorithm>
 #include <chrono>
@@ -118,8 +119,10 @@ void SetInitialState(MujocoScene* s) {
 
 std::unique_ptr<MujocoScene> LoadScene(const Case& c, const std::string& scenes_dir, const std::string& solver) {
   auto s = std::make_unique<MujocoScene>();
-  s->model = c.scenario == "S1" ? LoadSceneFromString(MakePileUrdf(c.n, c.shape, c.seed, true, PileOrientation::kAligned, 0.0, c.e_r), "s1_" + c.variant)
-                                : LoadSceneFromFile(scenes_dir + "/" + c.scene_file);
+  s->model = c.scenario == "S1"
+                 ? LoadSceneFromString(MakePileUrdf(c.n, c.shape, c.seed, true, PileOrientation::kAligned, 0.0, c.e_r),
+                                       "s1_" + c.variant)
+                 : LoadSceneFromFile(scenes_dir + "/" + c.scene_file);
   MjcfOptions options;
   options.h = c.h;
   options.solver = solver.empty() ? (c.scenario == "S1" ? "CG" : "Newton") : solver;
@@ -258,7 +261,8 @@ int ParseInteger(const std::string& flag, const std::string& text, double low, d
 
 // The cases the flags select (implicit_sim_bench's rules); throws std::invalid_argument for bad flags.
 std::vector<Case> SelectCases(std::map<std::string, std::string> values) {
-  const bool s1_flags = values.count("--shape") || values.count("--n") || values.count("--seed") || values.count("--e-r");
+  const bool s1_flags =
+      values.count("--shape") || values.count("--n") || values.count("--seed") || values.count("--e-r");
   if (!values.count("--scenario")) {
     if (s1_flags || values.count("--duration") || values.count("--dt") || values.count("--variant")) {
       throw std::invalid_argument("--shape, --n, --seed, --e-r, --variant, --duration and --dt need --scenario");

@@ -16,8 +16,8 @@ int main(int argc, char** argv) {
   std::map<std::string, std::string> values;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
-    if ((flag != "--n" && flag != "--shape" && flag != "--seed" && flag != "--orientation" && flag != "--e-roll" && flag != "--e-r" &&
-         flag != "--out") ||
+    if ((flag != "--n" && flag != "--shape" && flag != "--seed" && flag != "--orientation" && flag != "--e-roll" &&
+         flag != "--e-r" && flag != "--out") ||
         i + 1 >= argc) {
       std::cerr << "implicit_sim_make_pile: bad argument '" << flag << "' (" << usage << ")\n";
       return 2;

@@ -63,8 +63,8 @@ constexpr double kPileTorsionLever = 0.01;
 
 // The scene as URDF text (links "floor", "wall_px", "wall_nx", "wall_py", "wall_ny", "body_<i>"), friction mu = 0.5
 // with the torsional lever e_r (m; 0: point contacts without torsional friction) and rolling resistance e_roll (m)
-// when > 0. Throws std::invalid_argument for n outside [1, MaxPileSize] or e_r, e_roll outside [0, 1000]. With PileOrientation::kRandom the layout is RandomPileLayout and separate_overlaps has no effect
-// (nothing overlaps).
+// when > 0. Throws std::invalid_argument for n outside [1, MaxPileSize] or e_r, e_roll outside [0, 1000]. With
+// PileOrientation::kRandom the layout is RandomPileLayout and separate_overlaps has no effect (nothing overlaps).
 std::string MakePileUrdf(int n, PileShape shape, unsigned seed = 42, bool separate_overlaps = true,
                          PileOrientation orientation = PileOrientation::kAligned, double e_roll = 0.0,
                          double e_r = kPileTorsionLever);

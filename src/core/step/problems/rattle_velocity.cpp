@@ -182,8 +182,10 @@ void RattleVelocityProblem::AddPairRows(const RowContext& ctx, int c) const {
   const Vec3 dirs[5] = {t, o, zero, zero, zero}, dirs_w[5] = {zero, zero, n, t, o};
   const double rates[5] = {t.dot(v_rel), o.dot(v_rel), n.dot(w_rel), t.dot(w_rel), o.dot(w_rel)};
   for (int k = 0; k < friction.count; ++k) {  // a component on locked velocities only: s_k = 0 (friction_rows.h)
-    friction.locked[k] = closed && (e[k] == 0.0 || FrictionComponentLocked(ctx.layout, e1, dirs[k], r1.cross(dirs[k]) + dirs_w[k], e2,
-                                                           dirs[k], r2.cross(dirs[k]) + dirs_w[k]));
+    // e_k = 0 (no torsional friction): the component leaves the ellipsoid as a locked one does.
+    friction.locked[k] = closed && (e[k] == 0.0 || FrictionComponentLocked(ctx.layout, e1, dirs[k],
+                                                                            r1.cross(dirs[k]) + dirs_w[k], e2, dirs[k],
+                                                                            r2.cross(dirs[k]) + dirs_w[k]));
     friction.rate[k] = e[k] * rates[k];
     friction.s[k] = z[friction.Row(k)];
   }

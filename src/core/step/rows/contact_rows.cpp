@@ -218,7 +218,7 @@ void AddContactRows(const RowContext& ctx, int c, const ContactRowOptions& optio
   };
   friction.locked[0] = locked_along(t, t0);
   friction.locked[1] = locked_along(o, o0);
-  friction.locked[2] = fr.e_r == 0.0 || locked_about(n_bar);
+  friction.locked[2] = fr.e_r == 0.0 || locked_about(n_bar);  // e_r = 0: no torsional friction
   // Rolling resistance: e_roll (t_bar . w_rel) + s_q1 slip = 0 and likewise about o_bar (the averaged frame, as n_bar).
   const bool rolling = blk.rolling > 0;
   const Vec3 t_bar = end_weight * t + start_weight * t0, o_bar = end_weight * o + start_weight * o0;
