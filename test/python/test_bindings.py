@@ -103,7 +103,7 @@ def test_bad_options_are_refused_with_the_tables_message_and_change_nothing():
 def test_every_option_of_the_table_is_an_attribute_named_as_the_cpp_field():
     options = implicit_sim.StepperOptions()
     table = implicit_sim.option_table()
-    assert len(table) == 28
+    assert len(table) == 29
     for row in table:
         field = row["field"]
         owner, name = (options.newton, field[7:]) if field.startswith("newton.") else (options, field)

@@ -163,8 +163,11 @@ double SemismoothNewton::LineSearch(const NcpProblem& problem, const NewtonOptio
   for (int i = 0; i < std::min(history_count_, options.line_search_memory); ++i) {
     reference = std::max(reference, history_[(history_next_ + kMaxMemory - 1 - i) % kMaxMemory]);
   }
+  // Only the exact problem's solutions lie on the retraction's set (a proximal or smoothed one's need not).
+  const bool retract = options.retract_sliding && sparse_ && mode_.smoothing == 0.0 && mode_.proximal_weight == 0.0;
   for (double step = 1.0; step >= options.min_step; step *= 0.5) {
     z_trial_ = z + step * dz_;
+    if (retract) problem.Retract(z, &z_trial_);
     ++summary_->residual_evaluations;
     problem.Evaluate(z_trial_, mode_, &Phi_trial_, nullptr);
     const double trial_merit = 0.5 * Phi_trial_.squaredNorm();

@@ -29,5 +29,23 @@ TEST(LandingCases, ConvergeFromTheWarmStartWithoutTheColdRungs) {
   }
 }
 
+// A part wedged in a corner of the box (the 100-ellipsoid pile without torsion, e_r = 0): a sliding pair's friction
+// force is nearly redundant there, and a Newton step along its fractions' unit sphere left the sphere by more than
+// the residual; the step took 2 602 Newton iterations and sub-step splits. With the trial points scaled back onto the
+// sphere (StepProblem::Retract) it converges from the cold start, in 277 iterations.
+TEST(LandingCases, AWedgeConvergesWithTheSlidingFractionsOnTheirSphere) {
+  const StepCase step_case = ReadStepCase(std::string(IMPLICIT_SIM_SOURCE_DIR) +
+                                          "/bench/corpus/S1_ellipsoid_n100_er0_step0179.case");
+  ASSERT_TRUE(step_case.options.newton.retract_sliding);  // the default
+  const Model model = LoadStepCaseModel(step_case);
+  State end_state;
+  const StepReport report = ReplayStepCase(model, step_case, &end_state);
+  ASSERT_TRUE(report.converged) << StepFaultName(report.fault);
+  EXPECT_LE(report.cold_restarts, 1);
+  EXPECT_EQ(report.proximal_solves, 0);
+  EXPECT_EQ(report.substeps, 0);
+  EXPECT_LE(report.iterations, 600);
+}
+
 }  // namespace
 }  // namespace implicit_sim

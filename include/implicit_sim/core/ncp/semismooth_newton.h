@@ -79,6 +79,9 @@ struct NewtonOptions {
   // Sparse solves condense the problem's local blocks (NcpProblem::CondensableBlocks) out of the Newton matrix by a
   // Schur complement before KLU (condensed_lu.h); the whole matrix is factorized when a block is singular.
   bool condense_blocks = true;
+  // Sparse solves of the exact problem move each line-search trial point back onto the problem's curved solution set
+  // (NcpProblem::Retract: the step's sliding friction fractions onto their unit sphere).
+  bool retract_sliding = true;
   // When set, every iteration appends a row (not an option of the table: the replay tool's --trace).
   NewtonTrace* trace = nullptr;
   // When set and due, a solve stops before its next iteration (NcpTermination::kInterrupted); not an option of the

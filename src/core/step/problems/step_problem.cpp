@@ -1,5 +1,7 @@
 #include "implicit_sim/core/step/problems/step_problem.h"
 
+#include <cmath>
+
 #include "implicit_sim/core/step/rows/friction_rows.h"
 #include "step/contact_frame.h"
 
@@ -30,6 +32,28 @@ void StepProblem::EvaluateSparse(const Eigen::VectorXd& z, const NcpEvalMode& mo
   if (J) J->Begin(pattern_version());
   EvaluateInto(z, RowWriter(mode, Phi, nullptr, J, layout_.locked_rows()));
   if (J) J->Finish(size());
+}
+
+namespace {
+
+// |s| of a pair's friction fractions: s_t, s_o, s_r and, with rolling resistance, s_q1, s_q2.
+double FractionNorm(const Eigen::VectorXd& z, const PairBlock& blk) {
+  double norm2 = z.segment<3>(blk.offset + pi::kSt).squaredNorm();
+  if (blk.rolling) norm2 += z.segment<2>(blk.roll()).squaredNorm();
+  return std::sqrt(norm2);
+}
+
+}  // namespace
+
+void StepProblem::Retract(const Eigen::VectorXd& z, Eigen::VectorXd* trial) const {
+  constexpr double kOnSphere = 1e-9, kNearSphere = 1e-3;
+  for (const PairBlock& blk : layout_.blocks()) {
+    const double before = FractionNorm(z, blk), after = FractionNorm(*trial, blk);
+    // Only outward: a step along the sphere leaves it outward; a pair moving inward may be starting to stick.
+    if (std::abs(before - 1.0) > kOnSphere || after <= 1.0 || after - 1.0 > kNearSphere) continue;
+    trial->segment<3>(blk.offset + pi::kSt) /= after;
+    if (blk.rolling) trial->segment<2>(blk.roll()) /= after;
+  }
 }
 
 void StepProblem::SeedVelocities(const State& state, Eigen::VectorXd* z) const {
