@@ -219,6 +219,25 @@ TEST(PileScene, TheLargestPilesStayWithinThePairLimitAndLargerOnesAreRefused) {
   EXPECT_EQ(brackets.ContactPairBound(), 4 * 6 * 5 / 2 + 5 * 2 * 6);
 }
 
+// Every body of `a` starts where the same body of `b` does.
+void ExpectSameLayout(const Model& a, const Model& b) {
+  ASSERT_EQ(a.bodies.size(), b.bodies.size());
+  for (size_t i = 0; i < a.bodies.size(); ++i) EXPECT_EQ(a.bodies[i].X_WB0.matrix(), b.bodies[i].X_WB0.matrix()) << i;
+}
+
+// make(value) refuses each value outside [0, 1000] with std::invalid_argument naming `range`.
+template <typename Make>
+void ExpectOutOfRangeRefused(const Make& make, const std::string& range) {
+  for (const double bad : {-0.001, 2000.0, std::nan("")}) {
+    try {
+      make(bad);
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const std::invalid_argument& error) {
+      EXPECT_NE(std::string(error.what()).find(range), std::string::npos) << error.what();
+    }
+  }
+}
+
 // Rolling resistance on the pile's friction (the batch studies' e_roll): every pair gets it, the layout stays the same,
 // and a value out of range is refused naming the range.
 TEST(PileScene, RollingResistanceReachesEveryPairAndBadValuesAreRefused) {
@@ -231,17 +250,10 @@ TEST(PileScene, RollingResistanceReachesEveryPairAndBadValuesAreRefused) {
     EXPECT_EQ(with.pairs[k].friction.e_roll, 0.002) << k;
     EXPECT_EQ(without.pairs[k].friction.e_roll, 0.0) << k;
   }
-  for (size_t b = 0; b < with.bodies.size(); ++b) {
-    EXPECT_EQ(with.bodies[b].X_WB0.matrix(), without.bodies[b].X_WB0.matrix()) << b;
-  }
-  for (const double bad : {-0.001, 2000.0, std::nan("")}) {
-    try {
-      MakePileUrdf(5, PileShape::kSphere, 3, true, PileOrientation::kAligned, bad);
-      ADD_FAILURE() << bad << " accepted";
-    } catch (const std::invalid_argument& error) {
-      EXPECT_NE(std::string(error.what()).find("e_roll must be in [0, 1000] m"), std::string::npos) << error.what();
-    }
-  }
+  ExpectSameLayout(with, without);
+  ExpectOutOfRangeRefused(
+      [](double e_roll) { MakePileUrdf(5, PileShape::kSphere, 3, true, PileOrientation::kAligned, e_roll); },
+      "e_roll must be in [0, 1000] m");
 }
 
 // The torsional lever: 0.01 m unless asked otherwise, 0 (no torsional friction) reaches every pair with the same layout,
@@ -257,17 +269,10 @@ TEST(PileScene, TheTorsionalLeverReachesEveryPairAndBadValuesAreRefused) {
     EXPECT_EQ(point.pairs[k].friction.e_r, 0.0) << k;
     EXPECT_EQ(point.pairs[k].friction.mu, 0.5) << k;
   }
-  for (size_t b = 0; b < point.bodies.size(); ++b) {
-    EXPECT_EQ(point.bodies[b].X_WB0.matrix(), standard.bodies[b].X_WB0.matrix()) << b;
-  }
-  for (const double bad : {-0.001, 2000.0, std::nan("")}) {
-    try {
-      MakePileUrdf(5, PileShape::kSphere, 3, true, PileOrientation::kAligned, 0.0, bad);
-      ADD_FAILURE() << bad << " accepted";
-    } catch (const std::invalid_argument& error) {
-      EXPECT_NE(std::string(error.what()).find("e_r must be in [0, 1000] m"), std::string::npos) << error.what();
-    }
-  }
+  ExpectSameLayout(point, standard);
+  ExpectOutOfRangeRefused(
+      [](double e_r) { MakePileUrdf(5, PileShape::kSphere, 3, true, PileOrientation::kAligned, 0.0, e_r); },
+      "e_r must be in [0, 1000] m");
 }
 
 }  // namespace

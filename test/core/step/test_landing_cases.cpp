@@ -12,14 +12,20 @@
 namespace implicit_sim {
 namespace {
 
+StepCase CorpusCase(const std::string& name) {
+  return ReadStepCase(std::string(IMPLICIT_SIM_SOURCE_DIR) + "/bench/corpus/" + name + ".case");
+}
+
+StepReport Replay(const StepCase& step_case) {
+  const Model model = LoadStepCaseModel(step_case);
+  State end_state;
+  return ReplayStepCase(model, step_case, &end_state);
+}
+
 TEST(LandingCases, ConvergeFromTheWarmStartWithoutTheColdRungs) {
   for (const char* name : {"S1_ellipsoid_n100_step0025", "S1_ellipsoid_n100_step0031", "S1_sphere_n100_step0075"}) {
     SCOPED_TRACE(name);
-    const StepCase step_case =
-        ReadStepCase(std::string(IMPLICIT_SIM_SOURCE_DIR) + "/bench/corpus/" + name + ".case");
-    const Model model = LoadStepCaseModel(step_case);
-    State end_state;
-    const StepReport report = ReplayStepCase(model, step_case, &end_state);
+    const StepReport report = Replay(CorpusCase(name));
     ASSERT_TRUE(report.converged) << StepFaultName(report.fault);
     EXPECT_EQ(report.cold_restarts, 0);
     EXPECT_EQ(report.proximal_solves, 0);
@@ -34,12 +40,9 @@ TEST(LandingCases, ConvergeFromTheWarmStartWithoutTheColdRungs) {
 // the residual; the step took 2 602 Newton iterations and sub-step splits. With the trial points scaled back onto the
 // sphere (StepProblem::Retract) it converges from the cold start, in 277 iterations.
 TEST(LandingCases, AWedgeConvergesWithTheSlidingFractionsOnTheirSphere) {
-  const StepCase step_case = ReadStepCase(std::string(IMPLICIT_SIM_SOURCE_DIR) +
-                                          "/bench/corpus/S1_ellipsoid_n100_er0_step0179.case");
+  const StepCase step_case = CorpusCase("S1_ellipsoid_n100_er0_step0179");
   ASSERT_TRUE(step_case.options.newton.retract_sliding);  // the default
-  const Model model = LoadStepCaseModel(step_case);
-  State end_state;
-  const StepReport report = ReplayStepCase(model, step_case, &end_state);
+  const StepReport report = Replay(step_case);
   ASSERT_TRUE(report.converged) << StepFaultName(report.fault);
   EXPECT_LE(report.cold_restarts, 1);
   EXPECT_EQ(report.proximal_solves, 0);
