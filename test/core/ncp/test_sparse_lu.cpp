@@ -1,5 +1,6 @@
-// SparseLu (KLU) against a dense Eigen LU: random unsymmetric matrices that need pivoting, refactorization with new
-// values on the same pattern, ForgetPivots (a solve independent of the ones before), and singular matrices.
+// SparseLu against a dense Eigen LU, with each of its factorizations (KLU and UMFPACK, forced by the size threshold):
+// random unsymmetric matrices that need pivoting, refactorization with new values on the same pattern, ForgetPivots (a
+// solve independent of the ones before), singular matrices, and the choice by size.
 #include "implicit_sim/core/ncp/sparse_lu.h"
 
 #include <algorithm>
@@ -7,6 +8,7 @@
 #include <limits>
 #include <numeric>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <Eigen/LU>
@@ -19,6 +21,19 @@ namespace {
 
 using SparseMatrix = Eigen::SparseMatrix<double>;
 using ncp_test::RandomVector;
+
+constexpr int kAlwaysKlu = std::numeric_limits<int>::max();
+constexpr int kAlwaysUmfpack = 0;
+
+// The tests every factorization passes; the parameter is SparseLu's multifrontal_min_size.
+class SparseLuEither : public ::testing::TestWithParam<int> {
+ protected:
+  SparseLu MakeLu() const { return SparseLu(GetParam()); }
+};
+
+std::string FactorizationName(const ::testing::TestParamInfo<int>& info) {
+  return info.param == kAlwaysKlu ? "Klu" : "Umfpack";
+}
 
 // The positions of a random n x n pattern: per column, a dominant entry (on the diagonal, or with `permuted` in a
 // random row of a row permutation) and `extra` more in random rows.
@@ -80,13 +95,13 @@ double SolveError(SparseLu* lu, const SparseMatrix& A, int pattern_version, cons
   return RelativeErrorAgainstDense(A, b, x);
 }
 
-TEST(SparseLu, SolvesARandomUnsymmetricMatrixLikeADenseLu) {
+TEST_P(SparseLuEither, SolvesARandomUnsymmetricMatrixLikeADenseLu) {
   std::mt19937 rng(7);
   for (int n : {1, 5, 40, 200}) {
     SCOPED_TRACE(::testing::Message() << "n = " << n);
     const SparseMatrix A = RandomMatrix(n, RandomPattern(n, 3, false, &rng), &rng);
     const Eigen::VectorXd b = RandomVector(n, &rng);
-    SparseLu lu;
+    SparseLu lu = MakeLu();
     EXPECT_LT(SolveError(&lu, A, 1, b), 1e-12);
   }
 }
@@ -94,7 +109,7 @@ TEST(SparseLu, SolvesARandomUnsymmetricMatrixLikeADenseLu) {
 // A permuted dominant entry per column: cond(A) is about 1.3, but most diagonal entries are small. KLU's threshold
 // pivoting (klu_common::tol = 0.001 by default) keeps a diagonal pivot down to 1/1000 of its column's largest entry,
 // so the factors grow: errors of 5.6e-14 (n = 5), 2.1e-11 (n = 40), 3.6e-12 (n = 200) here, 1e-16 with tol = 0.1.
-TEST(SparseLu, SolvesARandomMatrixThatNeedsPivoting) {
+TEST_P(SparseLuEither, SolvesARandomMatrixThatNeedsPivoting) {
   std::mt19937 rng(7);
   for (int n : {1, 5, 40, 200}) {
     SCOPED_TRACE(::testing::Message() << "n = " << n);
@@ -103,27 +118,27 @@ TEST(SparseLu, SolvesARandomMatrixThatNeedsPivoting) {
       ASSERT_LT((Eigen::MatrixXd(A).diagonal().array().abs() > 3.0).count(), n);  // off-diagonal pivots
     }
     const Eigen::VectorXd b = RandomVector(n, &rng);
-    SparseLu lu;
+    SparseLu lu = MakeLu();
     EXPECT_LT(SolveError(&lu, A, 1, b), 1e-9);
   }
 }
 
 // What a partial-pivoting LU gives on these well-conditioned matrices (see above); fails with the default KLU tol.
-TEST(SparseLu, DISABLED_SolvesARandomMatrixThatNeedsPivotingToDenseAccuracy) {
+TEST(SparseLuKlu, DISABLED_SolvesARandomMatrixThatNeedsPivotingToDenseAccuracy) {
   std::mt19937 rng(7);
   for (int n : {1, 5, 40, 200}) {
     const SparseMatrix A = RandomMatrix(n, RandomPattern(n, 3, true, &rng), &rng);
     const Eigen::VectorXd b = RandomVector(n, &rng);
-    SparseLu lu;
+    SparseLu lu(kAlwaysKlu);
     EXPECT_LT(SolveError(&lu, A, 1, b), 1e-12) << "n = " << n;
   }
 }
 
-TEST(SparseLu, RefactorizesNewValuesOnTheSamePattern) {
+TEST_P(SparseLuEither, RefactorizesNewValuesOnTheSamePattern) {
   std::mt19937 rng(11);
   const int n = 60;
   const std::vector<std::pair<int, int>> pattern = RandomPattern(n, 4, false, &rng);
-  SparseLu lu;
+  SparseLu lu = MakeLu();
   for (int round = 0; round < 4; ++round) {  // the same pattern_version: analysis and pivot order are reused
     const SparseMatrix A = RandomMatrix(n, pattern, &rng);
     EXPECT_LT(SolveError(&lu, A, 3, RandomVector(n, &rng)), 1e-12) << "round " << round;
@@ -133,21 +148,21 @@ TEST(SparseLu, RefactorizesNewValuesOnTheSamePattern) {
 // New values on a pattern that needs pivoting: klu_refactor keeps the old pivot order unless a pivot is exactly 0, so
 // a pivot that became small is kept (errors 1.1e-9, 4.0e-8, 3.0e-8, 9.3e-10 in the four rounds, against 1.1e-9,
 // 1.3e-11, 1.0e-11, 1.0e-9 for fresh factorizations of the same matrices).
-TEST(SparseLu, DISABLED_RefactorizesNewValuesThatNeedOtherPivotsAsAccuratelyAsAFreshFactorization) {
+TEST(SparseLuKlu, DISABLED_RefactorizesNewValuesThatNeedOtherPivotsAsAccuratelyAsAFreshFactorization) {
   std::mt19937 rng(11);
   const int n = 60;
   const std::vector<std::pair<int, int>> pattern = RandomPattern(n, 4, true, &rng);
-  SparseLu reused;
+  SparseLu reused(kAlwaysKlu);
   for (int round = 0; round < 4; ++round) {
     const SparseMatrix A = RandomMatrix(n, pattern, &rng);
     const Eigen::VectorXd b = RandomVector(n, &rng);
-    SparseLu fresh;
+    SparseLu fresh(kAlwaysKlu);
     EXPECT_LE(SolveError(&reused, A, 3, b), 10.0 * SolveError(&fresh, A, 3, b)) << "round " << round;
   }
 }
 
-TEST(SparseLu, RefactorizationRecoversWhenAnOldPivotVanishes) {
-  SparseLu lu;
+TEST_P(SparseLuEither, RefactorizationRecoversWhenAnOldPivotVanishes) {
+  SparseLu lu = MakeLu();
   ASSERT_TRUE(lu.Factorize(Dense2x2(2, 1, 1, 1), 1));
   const SparseMatrix A = Dense2x2(0, 1, 1, 1e-3);  // the old diagonal pivots are now 0 and tiny
   ASSERT_TRUE(lu.Factorize(A, 1));
@@ -156,9 +171,9 @@ TEST(SparseLu, RefactorizationRecoversWhenAnOldPivotVanishes) {
   EXPECT_LT(RelativeErrorAgainstDense(A, Eigen::Vector2d(1, 2), x), 1e-14) << x.transpose();
 }
 
-TEST(SparseLu, FollowsANewPattern) {
+TEST_P(SparseLuEither, FollowsANewPattern) {
   std::mt19937 rng(5);
-  SparseLu lu;
+  SparseLu lu = MakeLu();
   for (int version = 0; version < 3; ++version) {
     const int n = 10 + 7 * version;  // a new size and pattern each time
     const SparseMatrix A = RandomMatrix(n, RandomPattern(n, 2, false, &rng), &rng);
@@ -166,24 +181,24 @@ TEST(SparseLu, FollowsANewPattern) {
   }
 }
 
-TEST(SparseLu, AfterForgetPivotsSolvesAsAFreshFactorization) {
+TEST(SparseLuKlu, AfterForgetPivotsSolvesAsAFreshFactorization) {
   std::mt19937 rng(3);
   const int n = 50;
   const std::vector<std::pair<int, int>> pattern = RandomPattern(n, 4, true, &rng);  // pivoting: orders may differ
   const SparseMatrix first = RandomMatrix(n, pattern, &rng);
   const SparseMatrix second = RandomMatrix(n, pattern, &rng);
   const Eigen::VectorXd b = RandomVector(n, &rng);
-  SparseLu fresh;
+  SparseLu fresh(kAlwaysKlu);
   ASSERT_TRUE(fresh.Factorize(second, 1));
   Eigen::VectorXd x_fresh = b;
   ASSERT_TRUE(fresh.Solve(&x_fresh));
-  SparseLu reused;
+  SparseLu reused(kAlwaysKlu);
   ASSERT_TRUE(reused.Factorize(first, 1));
   reused.ForgetPivots();
   ASSERT_TRUE(reused.Factorize(second, 1));
   Eigen::VectorXd x_reused = b;
   ASSERT_TRUE(reused.Solve(&x_reused));
-  SparseLu stale;  // without ForgetPivots the first matrix's pivot order shows in the result (by 6.5e-12 here)
+  SparseLu stale(kAlwaysKlu);  // without ForgetPivots the first matrix's pivot order shows in the result (by 6.5e-12 here)
   ASSERT_TRUE(stale.Factorize(first, 1) && stale.Factorize(second, 1));
   Eigen::VectorXd x_stale = b;
   ASSERT_TRUE(stale.Solve(&x_stale));
@@ -192,41 +207,84 @@ TEST(SparseLu, AfterForgetPivotsSolvesAsAFreshFactorization) {
   EXPECT_LT(RelativeErrorAgainstDense(second, b, x_fresh), 1e-9);
 }
 
-TEST(SparseLu, RejectsANumericallySingularMatrix) {
-  SparseLu lu;
+TEST_P(SparseLuEither, RejectsANumericallySingularMatrix) {
+  SparseLu lu = MakeLu();
   EXPECT_FALSE(lu.Factorize(Dense2x2(1, 2, 2, 4), 1));  // row 2 = 2 row 1, exactly
   Eigen::VectorXd x = Eigen::Vector2d(1, 1);
   EXPECT_FALSE(lu.Solve(&x));
 }
 
-TEST(SparseLu, RejectsAStructurallySingularMatrix) {
+TEST_P(SparseLuEither, RejectsAStructurallySingularMatrix) {
   // Column 1 is empty.
   const std::vector<Eigen::Triplet<double>> triplets = {{0, 0, 1.0}, {1, 0, 2.0}, {2, 2, 3.0}, {0, 2, 1.0}};
   SparseMatrix A(3, 3);
   A.setFromTriplets(triplets.begin(), triplets.end());
   A.makeCompressed();
-  SparseLu lu;
+  SparseLu lu = MakeLu();
   EXPECT_FALSE(lu.Factorize(A, 1));
   Eigen::VectorXd x = Eigen::Vector3d(1, 1, 1);
   EXPECT_FALSE(lu.Solve(&x));
 }
 
-TEST(SparseLu, RejectsASingularMatrixAfterARegularOneOnTheSamePattern) {
-  SparseLu lu;
+TEST_P(SparseLuEither, RejectsASingularMatrixAfterARegularOneOnTheSamePattern) {
+  SparseLu lu = MakeLu();
   ASSERT_TRUE(lu.Factorize(Dense2x2(2, 1, 1, 1), 1));
   EXPECT_FALSE(lu.Factorize(Dense2x2(1, 2, 2, 4), 1));
   Eigen::VectorXd x = Eigen::Vector2d(1, 1);
   EXPECT_FALSE(lu.Solve(&x));  // the regular matrix's factors are gone
 }
 
-TEST(SparseLu, DoesNotSolveBeforeAFactorizationOrWithAWrongSize) {
-  SparseLu lu;
+TEST_P(SparseLuEither, DoesNotSolveBeforeAFactorizationOrWithAWrongSize) {
+  SparseLu lu = MakeLu();
   Eigen::VectorXd x = Eigen::Vector2d(1, 1);
   EXPECT_FALSE(lu.Solve(&x));
   ASSERT_TRUE(lu.Factorize(Dense2x2(2, 1, 1, 1), 1));
   Eigen::VectorXd wrong = Eigen::Vector3d(1, 1, 1);
   EXPECT_FALSE(lu.Solve(&wrong));
   EXPECT_EQ(wrong, Eigen::Vector3d(1, 1, 1));
+}
+
+INSTANTIATE_TEST_SUITE_P(Factorizations, SparseLuEither, ::testing::Values(kAlwaysKlu, kAlwaysUmfpack),
+                         FactorizationName);
+
+// UMFPACK searches its pivots afresh in every factorization: what KLU's stale pivot order cannot do (the disabled KLU
+// tests above), it does.
+TEST(SparseLuUmfpack, SolvesARandomMatrixThatNeedsPivotingToDenseAccuracy) {
+  std::mt19937 rng(7);
+  for (int n : {1, 5, 40, 200}) {
+    const SparseMatrix A = RandomMatrix(n, RandomPattern(n, 3, true, &rng), &rng);
+    SparseLu lu(kAlwaysUmfpack);
+    EXPECT_LT(SolveError(&lu, A, 1, RandomVector(n, &rng)), 1e-12) << "n = " << n;
+  }
+}
+
+TEST(SparseLuUmfpack, RefactorizesNewValuesThatNeedOtherPivotsBitForBitAsAFreshFactorization) {
+  std::mt19937 rng(11);
+  const int n = 60;
+  const std::vector<std::pair<int, int>> pattern = RandomPattern(n, 4, true, &rng);
+  SparseLu reused(kAlwaysUmfpack);
+  for (int round = 0; round < 4; ++round) {
+    const SparseMatrix A = RandomMatrix(n, pattern, &rng);
+    const Eigen::VectorXd b = RandomVector(n, &rng);
+    SparseLu fresh(kAlwaysUmfpack);
+    Eigen::VectorXd x_reused = b, x_fresh = b;
+    ASSERT_TRUE(reused.Factorize(A, 3) && reused.Solve(&x_reused));
+    ASSERT_TRUE(fresh.Factorize(A, 3) && fresh.Solve(&x_fresh));
+    EXPECT_EQ(x_reused, x_fresh) << "round " << round;  // no trace of the earlier rounds
+    EXPECT_LT(RelativeErrorAgainstDense(A, b, x_reused), 1e-12) << "round " << round;
+  }
+}
+
+// The default threshold: KLU below kMultifrontalMinSize unknowns, UMFPACK from there on, switching with the pattern.
+TEST(SparseLu, ChoosesItsFactorizationByTheMatrixSize) {
+  std::mt19937 rng(13);
+  SparseLu lu;
+  int version = 0;
+  for (int n : {SparseLu::kMultifrontalMinSize - 1, SparseLu::kMultifrontalMinSize, 30}) {
+    const SparseMatrix A = RandomMatrix(n, RandomPattern(n, 3, false, &rng), &rng);
+    EXPECT_LT(SolveError(&lu, A, ++version, RandomVector(n, &rng)), 1e-12) << "n = " << n;
+    EXPECT_EQ(lu.multifrontal(), n >= SparseLu::kMultifrontalMinSize) << "n = " << n;
+  }
 }
 
 }  // namespace

@@ -1,9 +1,16 @@
-// Sparse LU of the Newton matrix by SuiteSparse KLU (block triangular form, AMD ordering, partial pivoting), made for
-// the very sparse, unsymmetric matrices of contact problems. The symbolic analysis is kept while the pattern stays
-// the same. Within a Newton solve the numeric factorization is refreshed with the previous pivot order
-// (klu_refactor), falling back to a fresh pivoting factorization when that meets a zero pivot; every solve starts
-// with a fresh one (ForgetPivots). Our code allocates nothing once a pattern has been factorized; KLU mallocs its
-// numeric object once per solve.
+// Sparse LU of the Newton matrix by SuiteSparse, made for the very sparse, unsymmetric matrices of contact problems.
+// Two factorizations, chosen by the matrix's size:
+// - below `multifrontal_min_size` unknowns, KLU (block triangular form, AMD ordering, left-looking partial
+//   pivoting). Within a Newton solve its numeric factorization is refreshed with the previous pivot order
+//   (klu_refactor), falling back to a fresh pivoting factorization when that meets a zero pivot; every solve starts
+//   with a fresh one (ForgetPivots). KLU mallocs its numeric object once per solve.
+// - from `multifrontal_min_size` unknowns on, UMFPACK (multifrontal, dense frontal matrices through the BLAS). Every
+//   factorization searches its pivots afresh within the kept symbolic analysis, so a stale pivot order never costs
+//   accuracy, and ForgetPivots has nothing to forget. UMFPACK mallocs its numeric object once per factorization.
+// On the large islands of landing piles KLU's left-looking kernel was 88 % of a step and its stale pivots left the
+// condensed directions inaccurate (bench/README.md, "The factorization of large islands").
+// The symbolic analysis is kept while the pattern stays the same. Our code allocates nothing once a pattern has been
+// factorized.
 #pragma once
 
 #include <memory>
@@ -14,7 +21,10 @@ namespace implicit_sim {
 
 class SparseLu {
  public:
-  SparseLu();
+  // The smallest matrix (unknowns) factorized by UMFPACK; smaller ones go to KLU.
+  static constexpr int kMultifrontalMinSize = 1000;
+
+  explicit SparseLu(int multifrontal_min_size = kMultifrontalMinSize);
   ~SparseLu();
   SparseLu(const SparseLu&) = delete;
   SparseLu& operator=(const SparseLu&) = delete;
@@ -25,6 +35,8 @@ class SparseLu {
   void ForgetPivots();
   // x = A^-1 b in place; false if not factorized.
   bool Solve(Eigen::VectorXd* b);
+  // Whether the last Factorize went to UMFPACK.
+  bool multifrontal() const;
 
  private:
   struct Impl;
