@@ -22,7 +22,7 @@ namespace {
 using SparseMatrix = Eigen::SparseMatrix<double>;
 using ncp_test::RandomVector;
 
-constexpr int kAlwaysKlu = std::numeric_limits<int>::max();
+constexpr int kAlwaysKlu = SparseLu::kNeverMultifrontal;
 constexpr int kAlwaysUmfpack = 0;
 
 // The tests every factorization passes; the parameter is SparseLu's multifrontal_min_size.
@@ -275,16 +275,21 @@ TEST(SparseLuUmfpack, RefactorizesNewValuesThatNeedOtherPivotsBitForBitAsAFreshF
   }
 }
 
-// The default threshold: KLU below kMultifrontalMinSize unknowns, UMFPACK from there on, switching with the pattern.
+// KLU below the threshold, UMFPACK from there on, switching with the pattern; KLU at every size by default.
 TEST(SparseLu, ChoosesItsFactorizationByTheMatrixSize) {
   std::mt19937 rng(13);
-  SparseLu lu;
+  constexpr int kThreshold = 100;
+  SparseLu lu(kThreshold);
   int version = 0;
-  for (int n : {SparseLu::kMultifrontalMinSize - 1, SparseLu::kMultifrontalMinSize, 30}) {
+  for (int n : {kThreshold - 1, kThreshold, 30}) {
     const SparseMatrix A = RandomMatrix(n, RandomPattern(n, 3, false, &rng), &rng);
     EXPECT_LT(SolveError(&lu, A, ++version, RandomVector(n, &rng)), 1e-12) << "n = " << n;
-    EXPECT_EQ(lu.multifrontal(), n >= SparseLu::kMultifrontalMinSize) << "n = " << n;
+    EXPECT_EQ(lu.multifrontal(), n >= kThreshold) << "n = " << n;
   }
+  SparseLu by_default;
+  const int n = 3000;
+  ASSERT_TRUE(by_default.Factorize(RandomMatrix(n, RandomPattern(n, 3, false, &rng), &rng), 1));
+  EXPECT_FALSE(by_default.multifrontal());
 }
 
 }  // namespace

@@ -30,6 +30,9 @@ class CondensedLu {
  public:
   // The largest block condensed; larger ones stay in the global system.
   static constexpr int kMaxBlock = 32;
+  // The smallest condensed system (unknowns) factorized by UMFPACK instead of KLU (sparse_lu.h): an island of several
+  // hundred bodies.
+  static constexpr int kMultifrontalMinSize = 3000;
 
   // Sets the blocks: block p holds the unknowns indices[starts[p] .. starts[p + 1]). Forces a new analysis when they
   // differ from the last ones.
@@ -76,7 +79,7 @@ class CondensedLu {
   std::vector<int> schur_slot_;
   Eigen::SparseMatrix<double> S_;
   Eigen::VectorXd rhs_global_;
-  SparseLu lu_;
+  SparseLu lu_{kMultifrontalMinSize};
 };
 
 }  // namespace implicit_sim

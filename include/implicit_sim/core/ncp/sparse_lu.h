@@ -1,5 +1,5 @@
 // Sparse LU of the Newton matrix by SuiteSparse, made for the very sparse, unsymmetric matrices of contact problems.
-// Two factorizations, chosen by the matrix's size:
+// Two factorizations, chosen by the matrix's size (KLU for every size unless the owner sets `multifrontal_min_size`):
 // - below `multifrontal_min_size` unknowns, KLU (block triangular form, AMD ordering, left-looking partial
 //   pivoting). Within a Newton solve its numeric factorization is refreshed with the previous pivot order
 //   (klu_refactor), falling back to a fresh pivoting factorization when that meets a zero pivot; every solve starts
@@ -7,12 +7,14 @@
 // - from `multifrontal_min_size` unknowns on, UMFPACK (multifrontal, dense frontal matrices through the BLAS). Every
 //   factorization searches its pivots afresh within the kept symbolic analysis, so a stale pivot order never costs
 //   accuracy, and ForgetPivots has nothing to forget. UMFPACK mallocs its numeric object once per factorization.
-// On the large islands of landing piles KLU's left-looking kernel was 88 % of a step and its stale pivots left the
-// condensed directions inaccurate (bench/README.md, "The factorization of large islands").
+// CondensedLu takes UMFPACK for the condensed systems of islands of several hundred bodies, where KLU's left-looking
+// kernel was 88 % of a landing step; on smaller ones KLU's steady pivot order measured better over whole piles
+// (bench/README.md, "The factorization of large islands").
 // The symbolic analysis is kept while the pattern stays the same. Our code allocates nothing once a pattern has been
 // factorized.
 #pragma once
 
+#include <limits>
 #include <memory>
 
 #include <Eigen/SparseCore>
@@ -21,10 +23,10 @@ namespace implicit_sim {
 
 class SparseLu {
  public:
-  // The smallest matrix (unknowns) factorized by UMFPACK; smaller ones go to KLU.
-  static constexpr int kMultifrontalMinSize = 1000;
+  static constexpr int kNeverMultifrontal = std::numeric_limits<int>::max();
 
-  explicit SparseLu(int multifrontal_min_size = kMultifrontalMinSize);
+  // Matrices of at least `multifrontal_min_size` unknowns go to UMFPACK, smaller ones to KLU.
+  explicit SparseLu(int multifrontal_min_size = kNeverMultifrontal);
   ~SparseLu();
   SparseLu(const SparseLu&) = delete;
   SparseLu& operator=(const SparseLu&) = delete;
