@@ -86,7 +86,7 @@ class NcpProblem {
   }
   // Moves a line-search trial point back onto a curved set that every solution lies on, for the unknowns that z
   // already lies on (NewtonOptions::retract_sliding). By default nothing.
-  virtual void Retract(const Eigen::VectorXd& z, Eigen::VectorXd* trial) const {}
+  virtual void Retract(const Eigen::VectorXd& /*z*/, Eigen::VectorXd* /*trial*/) const {}
 };
 
 }  // namespace implicit_sim

@@ -43,12 +43,12 @@ class StepProblem : public NcpProblem {
                 Eigen::MatrixXd* J) const override;
   void EvaluateSparse(const Eigen::VectorXd& z, const NcpEvalMode& mode, Eigen::VectorXd* Phi,
                       SparseJacobian* J) const override;
-  // One block per pair: its closest-point unknowns, whose rows touch only themselves and the pair's velocities.
   // A sliding pair's friction fractions lie on the unit sphere at every solution (|s| = 1 where sigma > 0,
   // rows/friction_rows.h). A pair on it at z (to 1e-9) and near it at the trial point (to 1e-3) is scaled back onto
   // it: a Newton step along the sphere leaves it by |ds|^2 / 2, which can exceed the residual where the pair's force
   // is nearly redundant (a part wedged in a corner; bench/README.md, "S1 without torsional friction").
   void Retract(const Eigen::VectorXd& z, Eigen::VectorXd* trial) const override;
+  // One block per pair: its closest-point unknowns, whose rows touch only themselves and the pair's velocities.
   void CondensableBlocks(std::vector<int>* starts, std::vector<int>* indices) const override {
     layout_.CondensableBlocks(starts, indices);
   }
