@@ -416,6 +416,30 @@ TEST(PileStudy, ATinyPileSampleRunsAndItsLineHasTheReliabilityFields) {
   EXPECT_FALSE(Exists(out + "/report_faces.png"));  // a pile has no classes
 }
 
+// stop.max_wall: a sample over its wall budget is stopped inside its run and still gets its line (stop_reason
+// max_wall, the runner's exit 3, the simulated time it reached); the report counts it.
+TEST(PileStudy, ASampleOverItsWallBudgetStopsAndItsLineSaysSo) {
+  const std::string dir = TempDir("pile_wall");
+  std::string sweep = TinyPileSweep(dir, 30, 2.0);
+  ASSERT_FALSE(sweep.empty());
+  std::string text = Read(sweep);
+  const size_t hold = text.find("    hold: 0.2\n");
+  ASSERT_NE(hold, std::string::npos);
+  text.insert(hold + std::string("    hold: 0.2\n").size(), "  max_wall: 0.3\n");
+  std::ofstream(sweep) << text;
+  const std::string out = dir + "/study";
+  ASSERT_EQ(Batch(sweep + " --out " + out + " --samples 1 --jobs 1", out), 0) << Read(out + ".err");
+  const std::vector<std::string> lines = Lines(Read(out + "/results.jsonl"));
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(Field(lines[0], "stop_reason"), "\"max_wall\"") << lines[0];
+  EXPECT_EQ(Field(lines[0], "runner_exit"), "3") << lines[0];
+  const double t_end = std::stod(Field(lines[0], "t_end"));
+  EXPECT_GT(t_end, 0.0) << lines[0];
+  EXPECT_LT(t_end, 2.0) << lines[0];  // 30 ellipsoids cannot land in 0.3 s of wall time
+  EXPECT_EQ(Field(lines[0], "nan"), "false") << lines[0];
+  EXPECT_NE(Read(out + ".out").find("stopped by max_wall: 1;"), std::string::npos) << Read(out + ".out");
+}
+
 // The checks of a run's trajectory can fail: a body through a wall, one below the floor and a NaN are counted.
 TEST(PileStudy, TheTrajectoryChecksCountBodiesOutOfTheBoxAndNaN) {
   const std::string dir = TempDir("checks");
@@ -481,6 +505,8 @@ TEST(PileStudy, ThePileKeyParsesAndBadValuesAreRefusedNamingTheKey) {
       {"no_shape", "  shape: ellipsoid\n", "", {"pile.shape", "missing"}},
       {"with_scene", "samples: 200", "samples: 200\nscene: ../cube_drop.urdf", {"scene", "not allowed with pile"}},
       {"not_a_mapping", "pile:\n(  [^\n]*\n)+", "pile: 50\n", {"pile", "mapping"}},
+      {"zero_max_wall", "    hold: 0.2", "    hold: 0.2\n  max_wall: 0", {"stop.max_wall", "(0, 1e+07] s"}},
+      {"text_max_wall", "    hold: 0.2", "    hold: 0.2\n  max_wall: long", {"stop.max_wall", "number"}},
   };
   for (const Case& c : cases) {
     const std::string text = std::regex_replace(good, std::regex(c.from), c.to, std::regex_constants::format_first_only);
