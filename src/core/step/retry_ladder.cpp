@@ -143,11 +143,16 @@ bool ProximalPoint(const StepperOptions& options, Ladder* ladder, BestAttempt* b
   return PolishOrOffer(options, ladder, best, summary);
 }
 
-// Rung 3: Newton on the FB functions smoothed by mu = 1e-2, 1e-3, ..., 1e-8, each from the last, then exactly.
-// Starts from z as it is.
+// Rung 3: Newton on the FB functions smoothed by mu = 1e-2, 1e-3, ..., 1e-8, each from the last while they converge,
+// then exactly. Starts from z as it is.
 bool SmoothingContinuation(const StepperOptions& options, Ladder* ladder, BestAttempt* best, NcpSummary* summary) {
   ladder->report->smoothed_solves++;
-  for (double mu = 1e-2; mu > 1e-9 && ladder->z.allFinite(); mu *= 0.1) *summary = ladder->Solve(options.newton, mu);
+  for (double mu = 1e-2; mu > 1e-9 && ladder->z.allFinite(); mu *= 0.1) {
+    *summary = ladder->Solve(options.newton, mu);
+    // A level that did not converge leaves a point the smaller levels stall at too (the pile steps' traces: 100
+    // iterations a level at the same residual): go to the exact polish from there.
+    if (!summary->converged) break;
+  }
   return PolishOrOffer(options, ladder, best, summary);
 }
 

@@ -50,21 +50,48 @@ TEST_P(FailureLadderBothSchemes, WhenEveryRungFailsEachIsCountedAndTheBestFinite
 INSTANTIATE_TEST_SUITE_P(Schemes, FailureLadderBothSchemes,
                          ::testing::Values(StepperOptions::Scheme::kPaper, StepperOptions::Scheme::kRattle));
 
-TEST(FailureLadder, AnIterationLimitOfOneIsRescuedByTheLadder) {
+// With the default ladder one Newton iteration per solve still solves the step: the proximal rounds walk to the
+// solution. Without the proximal rung nothing does (the continuation stops at its first level, which one iteration
+// cannot converge): the step is reported not converged, and stays finite.
+TEST(FailureLadder, AnIterationLimitOfOneIsRescuedByTheProximalRung) {
   for (const double proximal_weight : {0.0, 1.0}) {
     Warm w;
     StepperOptions options;
     options.newton.max_iterations = 1;
     options.proximal_weight = proximal_weight;
     const StepReport report = Step(w.model, options, &w.state, &w.data);
-    EXPECT_TRUE(report.converged);
     EXPECT_GE(report.cold_restarts, 1);
-    if (proximal_weight > 0.0) {  // one Newton iteration per proximal round: the rounds walk to the solution
+    if (proximal_weight > 0.0) {
+      EXPECT_TRUE(report.converged);
       EXPECT_GE(report.proximal_solves, 1);
     } else {
-      EXPECT_GE(report.smoothed_solves + report.substeps, 1);
+      EXPECT_FALSE(report.converged);
+      EXPECT_EQ(report.substeps, 1 + 2 + 4 + 8);
+      EXPECT_TRUE(w.state.q.allFinite() && w.state.v.allFinite());
     }
   }
+}
+
+// The smoothing continuation stops at its first level that does not converge and polishes from there: with one
+// Newton iteration a solve, no level converges, so every continuation (one per (sub-)step) traces mu = 1e-2 and then
+// the exact polish, never mu = 1e-3 or below.
+TEST(FailureLadder, TheContinuationStopsAtItsFirstUnconvergedLevel) {
+  Warm w;
+  StepperOptions options;
+  options.scheme = StepperOptions::Scheme::kPaper;
+  options.newton.max_iterations = 1;
+  options.newton.tolerance = 1e-300;
+  options.ipopt_max_iterations = 1;
+  NewtonTrace trace;
+  options.newton.trace = &trace;
+  const StepReport report = Step(w.model, options, &w.state, &w.data);
+  EXPECT_EQ(report.smoothed_solves, 1 + 2 + 4 + 8 + 16);
+  int first_level_rows = 0;
+  for (const NewtonTraceRow& row : trace.rows) {
+    EXPECT_TRUE(row.smoothing == 0.0 || row.smoothing == 1e-2) << "solve " << row.solve << ": mu " << row.smoothing;
+    first_level_rows += row.smoothing == 1e-2;
+  }
+  EXPECT_EQ(first_level_rows, report.smoothed_solves);
 }
 
 TEST(FailureLadder, AnImpossibleToleranceIsReportedAsNotConvergedWithTheRightPhysics) {

@@ -14,7 +14,7 @@
 //       c (z - z_k) on the contact force and friction rows, each round from the last (z_k), c divided by 10 a round,
 //       from the better of rungs 1-2;
 //   3. smoothing continuation: Newton on the Fischer-Burmeister functions smoothed by mu = 1e-2, 1e-3, ... 1e-8, each
-//      from the last, then on the exact problem;
+//      from the last, up to the first level that does not converge, then on the exact problem;
 //   4. Ipopt on the complementarity-penalty NLP (ncp/ipopt_ncp.h) from the best of rungs 1-2, polished by Newton.
 // Without a warm start the ladder begins at rung 2. With the Ipopt solver as the primary one it stops after rung 2.
 // When every rung fails the best finite iterate is kept; the stepper then splits the step (time_stepper.h).
