@@ -1,5 +1,8 @@
 #include "implicit_sim/core/ncp/dense_lu.h"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <utility>
 
 namespace implicit_sim {
@@ -85,6 +88,128 @@ void DenseLu::Solve(Eigen::VectorXd* b) const {
   }
   lu_.triangularView<Eigen::UnitLower>().solveInPlace(*b);
   lu_.triangularView<Eigen::Upper>().solveInPlace(*b);
+}
+
+void CompletePivotLu::UpdateColumnMax(Eigen::Index j, Eigen::Index first_row) {
+  double largest = -1.0;
+  Eigen::Index row = first_row;
+  for (Eigen::Index i = first_row; i < lu_.rows(); ++i) {
+    const double magnitude = std::abs(lu_(i, j));
+    if (magnitude > largest) {  // the first of equal magnitudes, as Eigen's maxCoeff
+      largest = magnitude;
+      row = i;
+    }
+  }
+  column_max_[j] = largest;
+  column_max_row_[j] = static_cast<int>(row);
+}
+
+void CompletePivotLu::Reserve(int n) {
+  lu_.resize(n, n);
+  row_swaps_.resize(n);
+  column_swaps_.resize(n);
+  below_.resize(n);
+  column_max_.resize(n);
+  column_max_row_.resize(n);
+  if (changed_.size() != n) changed_.setZero(n);
+  c_.resize(n);
+}
+
+void CompletePivotLu::Factorize(const Eigen::MatrixXd& A) {
+  lu_ = A;
+  finite_ = lu_.allFinite();
+  const Eigen::Index n = lu_.rows();
+  Reserve(static_cast<int>(n));  // nothing to do at the size reserved
+  nonzero_pivots_ = n;
+  max_pivot_ = 0.0;
+  for (Eigen::Index j = 0; j < n; ++j) UpdateColumnMax(j, 0);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    // The pivot: the largest |entry| of the remaining block, the first in column-major order (Eigen's visitor).
+    Eigen::Index pivot_column = k;
+    for (Eigen::Index j = k + 1; j < n; ++j) {
+      if (column_max_[j] > column_max_[pivot_column]) pivot_column = j;
+    }
+    const double biggest = column_max_[pivot_column];
+    if (!(biggest > 0.0)) {  // the rest is exactly zero (or not a number: Eigen stops there too)
+      nonzero_pivots_ = k;
+      for (Eigen::Index i = k; i < n; ++i) row_swaps_[i] = column_swaps_[i] = static_cast<int>(i);
+      break;
+    }
+    const Eigen::Index pivot_row = column_max_row_[pivot_column];
+    max_pivot_ = std::max(max_pivot_, biggest);
+    row_swaps_[k] = static_cast<int>(pivot_row);
+    column_swaps_[k] = static_cast<int>(pivot_column);
+    if (pivot_row != k) lu_.row(k).swap(lu_.row(pivot_row));
+    if (pivot_column != k) {
+      lu_.col(k).swap(lu_.col(pivot_column));
+      std::swap(column_max_[k], column_max_[pivot_column]);
+      std::swap(column_max_row_[k], column_max_row_[pivot_column]);
+    }
+    const double pivot = lu_(k, k);
+    int reached = 0;
+    for (Eigen::Index i = k + 1; i < n; ++i) {
+      if (lu_(i, k) == 0.0) continue;
+      lu_(i, k) /= pivot;
+      below_[reached++] = static_cast<int>(i);
+    }
+    for (int r = 0; r < reached; ++r) changed_[below_[r]] = 1;
+    for (Eigen::Index j = k + 1; j < n; ++j) {
+      // Column j lost row k from its remaining rows, row pivot_row now holds what row k held, and the elimination
+      // changes the reached rows if u != 0. Its maximum stands unless it was in one of those rows (a maximum that row k
+      // held was the first one); a changed row may beat it, or tie with it from an earlier row.
+      const double u = lu_(k, j);
+      const bool touched = reached > 0 && u != 0.0;
+      if (touched) {
+        for (int r = 0; r < reached; ++r) lu_(below_[r], j) -= lu_(below_[r], k) * u;
+      }
+      const int row = column_max_row_[j];
+      if (row == k || row == pivot_row || (touched && changed_[row])) {
+        UpdateColumnMax(j, k + 1);
+      } else if (touched) {
+        for (int r = 0; r < reached; ++r) {
+          const double magnitude = std::abs(lu_(below_[r], j));
+          if (magnitude > column_max_[j] || (magnitude == column_max_[j] && below_[r] < column_max_row_[j])) {
+            column_max_[j] = magnitude;
+            column_max_row_[j] = below_[r];
+          }
+        }
+      }
+    }
+    for (int r = 0; r < reached; ++r) changed_[below_[r]] = 0;
+  }
+}
+
+int CompletePivotLu::rank() const {
+  // Eigen's default threshold: a pivot counts if it exceeds epsilon n times the largest.
+  const double threshold = std::abs(max_pivot_) * (Eigen::NumTraits<double>::epsilon() * static_cast<double>(lu_.rows()));
+  int rank = 0;
+  for (Eigen::Index i = 0; i < nonzero_pivots_; ++i) rank += std::abs(lu_(i, i)) > threshold;
+  return rank;
+}
+
+void CompletePivotLu::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) {
+  const Eigen::Index n = lu_.rows();
+  x->resize(n);
+  if (!finite_) {  // no direction from a matrix that is not finite
+    x->setConstant(std::numeric_limits<double>::quiet_NaN());
+    return;
+  }
+  const int r = rank();
+  if (r == 0) {
+    x->setZero();
+    return;
+  }
+  c_ = b;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    if (row_swaps_[k] != k) std::swap(c_[k], c_[row_swaps_[k]]);
+  }
+  lu_.triangularView<Eigen::UnitLower>().solveInPlace(c_);
+  lu_.topLeftCorner(r, r).triangularView<Eigen::Upper>().solveInPlace(c_.head(r));
+  c_.tail(n - r).setZero();
+  for (Eigen::Index k = n - 1; k >= 0; --k) {
+    if (column_swaps_[k] != k) std::swap(c_[k], c_[column_swaps_[k]]);
+  }
+  *x = c_;
 }
 
 }  // namespace implicit_sim

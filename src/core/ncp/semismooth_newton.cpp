@@ -21,7 +21,7 @@ void SemismoothNewton::Resize(int n) {
     normal_.resize(n, n);
     lu_singular_ = Eigen::PartialPivLU<Eigen::MatrixXd>(n);
     // Only the singular direction's factorization that this size uses (see Direction).
-    full_lu_ = n < kColumnQrMinSize ? Eigen::FullPivLU<Eigen::MatrixXd>(n, n) : Eigen::FullPivLU<Eigen::MatrixXd>();
+    if (n < kColumnQrMinSize) full_lu_.Reserve(n);
     column_qr_ = n < kColumnQrMinSize ? Eigen::ColPivHouseholderQR<Eigen::MatrixXd>()
                                       : Eigen::ColPivHouseholderQR<Eigen::MatrixXd>(n, n);
     ldlt_ = Eigen::LDLT<Eigen::MatrixXd>(n);
@@ -112,8 +112,9 @@ bool SemismoothNewton::Direction(const NewtonOptions& options, double merit, boo
       // QR's on large ones, where the LU's search over the whole matrix dominated the step (bench/README.md).
       ++summary_->factorizations;
       if (J_.rows() < kColumnQrMinSize) {
-        full_lu_.compute(J_);
-        dz_.noalias() = full_lu_.solve(-Phi_);
+        full_lu_.Factorize(J_);
+        rhs_ = -Phi_;
+        full_lu_.Solve(rhs_, &dz_);
       } else {
         column_qr_.compute(J_);
         dz_.noalias() = column_qr_.solve(-Phi_);

@@ -1,5 +1,6 @@
 // DenseLu against Eigen's PartialPivLU: mostly-zero random matrices (as the step's dense Jacobians are), solves with A
 // and A^T, the condition estimate against the exact reciprocal condition number, singular and non-finite matrices.
+// CompletePivotLu against Eigen's FullPivLU, bit for bit, on singular mostly-zero matrices with tied entries.
 #include "implicit_sim/core/ncp/dense_lu.h"
 
 #include <cmath>
@@ -89,6 +90,68 @@ TEST(DenseLu, SingularAndNonFiniteMatricesAreReportedAsSuch) {
   lu.Factorize(Eigen::MatrixXd(0, 0));
   EXPECT_EQ(lu.PivotRatio(), 1.0);
   EXPECT_EQ(lu.ConditionEstimate(), 1.0);
+}
+
+// n x n, mostly zeros, rank deficient in exact arithmetic: whole columns copied (a flat face's free closest point),
+// rows and columns of zeros (an unknown without a row), multiples of rows with round-off, and entries drawn from a few
+// values (+-1, +-0.5, 2; half the entries, or all of them) so that equal magnitudes tie for the pivot, also after
+// elimination steps.
+Eigen::MatrixXd SingularMatrix(int n, double density, bool all_tied, std::mt19937* rng) {
+  std::uniform_real_distribution<double> coin(0.0, 1.0);
+  std::uniform_int_distribution<int> pick(0, 5), index(0, n - 1);
+  const double values[] = {1.0, -1.0, 0.5, -0.5, 2.0, 0.0};
+  Eigen::MatrixXd A = SparseRandomMatrix(n, density, 3, rng);
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      if (A(i, j) != 0.0 && (all_tied || coin(*rng) < 0.5)) A(i, j) = values[pick(*rng)];
+    }
+  }
+  if (n < 2) return A;
+  A.col(index(*rng)) = A.col(index(*rng));
+  A.row(index(*rng)).setZero();
+  A.col(index(*rng)).setZero();
+  A.row(index(*rng)) = 3.0 * A.row(index(*rng));
+  return A;
+}
+
+TEST(CompletePivotLu, IsEigensFullPivLuBitForBitOnSingularMostlyZeroMatrices) {
+  std::mt19937 rng(5);
+  CompletePivotLu lu;
+  Eigen::VectorXd x;
+  int rank_deficient = 0;
+  for (int trial = 0; trial < 800; ++trial) {
+    const int n = 1 + trial % 60;
+    const double density = trial % 3 == 0 ? 0.05 : (trial % 3 == 1 ? 0.2 : 0.6);
+    SCOPED_TRACE(testing::Message() << "trial " << trial << ", n = " << n << ", density = " << density);
+    const Eigen::MatrixXd A = trial % 7 == 6 ? SparseRandomMatrix(n, density, 2, &rng)
+                                             : SingularMatrix(n, density, trial % 2 == 1, &rng);
+    const Eigen::VectorXd b = Eigen::VectorXd::Random(n);
+    const Eigen::FullPivLU<Eigen::MatrixXd> reference(A);
+    lu.Factorize(A);
+    ASSERT_EQ(lu.rank(), reference.rank());
+    rank_deficient += reference.rank() < n;
+    lu.Solve(b, &x);
+    const Eigen::VectorXd expected = reference.solve(b);
+    for (int i = 0; i < n; ++i) ASSERT_EQ(x[i], expected[i]) << "entry " << i;  // (-0 == 0: a zero's sign may differ)
+  }
+  EXPECT_GT(rank_deficient, 600);
+}
+
+TEST(CompletePivotLu, ZeroAndNonFiniteMatrices) {
+  CompletePivotLu lu;
+  Eigen::VectorXd x;
+  lu.Factorize(Eigen::MatrixXd::Zero(4, 4));
+  EXPECT_EQ(lu.rank(), 0);
+  lu.Solve(Eigen::VectorXd::Ones(4), &x);
+  EXPECT_EQ(x, Eigen::VectorXd::Zero(4));
+  Eigen::MatrixXd A = Eigen::MatrixXd::Identity(3, 3);
+  A(1, 2) = std::numeric_limits<double>::infinity();
+  lu.Factorize(A);
+  lu.Solve(Eigen::VectorXd::Ones(3), &x);
+  EXPECT_FALSE(x.allFinite());
+  lu.Factorize(Eigen::MatrixXd(0, 0));
+  lu.Solve(Eigen::VectorXd(0), &x);
+  EXPECT_EQ(x.size(), 0);
 }
 
 }  // namespace

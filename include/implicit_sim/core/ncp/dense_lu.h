@@ -33,4 +33,33 @@ class DenseLu {
   bool finite_ = true;
 };
 
+// LU with complete pivoting, P A Q = L U, for the basic direction of a singular Newton matrix of a few-body island: the
+// unknowns past its numerical rank are left where they are (0 in the solution). It reproduces Eigen's FullPivLU
+// bit for bit (the same pivots, the same arithmetic, its rank threshold and its triangular solves), and differs only in
+// the work: it skips zero multipliers and zero pivot-row entries, and finds each pivot from per-column maxima that it
+// updates only in the columns the elimination or the row swap touched, instead of scanning the whole remaining block.
+class CompletePivotLu {
+ public:
+  // Allocates the workspace of an n x n matrix, so that factorizing and solving at that size allocate nothing.
+  void Reserve(int n);
+  void Factorize(const Eigen::MatrixXd& A);
+  // The basic solution x of A x = b: rank() pivots solved, the other unknowns 0 (as FullPivLU::solve); NaN if A was
+  // not finite.
+  void Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x);
+  int rank() const;
+
+ private:
+  void UpdateColumnMax(Eigen::Index j, Eigen::Index first_row);
+  Eigen::MatrixXd lu_;
+  Eigen::VectorXi row_swaps_, column_swaps_;  // at step k, row / column k was swapped with this one (>= k)
+  Eigen::VectorXi below_;                     // workspace: the rows with a nonzero multiplier in the current column
+  Eigen::VectorXd column_max_;                // per column, the largest |entry| in the rows not yet eliminated
+  Eigen::VectorXi column_max_row_;            // and its first row
+  Eigen::Matrix<char, Eigen::Dynamic, 1> changed_;  // workspace: 1 for the rows the current elimination step changes
+  Eigen::VectorXd c_;                         // the solve's workspace
+  Eigen::Index nonzero_pivots_ = 0;
+  double max_pivot_ = 0.0;
+  bool finite_ = true;
+};
+
 }  // namespace implicit_sim

@@ -147,7 +147,7 @@ class SemismoothNewton {
   DenseLu lu_dense_;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu_singular_;  // where lu_dense_ finds J singular (see Direction)
   // A singular dense J's basic direction (free unknowns unmoved): full_lu_ on small islands, column_qr_ on large ones.
-  Eigen::FullPivLU<Eigen::MatrixXd> full_lu_;
+  CompletePivotLu full_lu_;
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> column_qr_;
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
   SparseJacobian J_sparse_;
