@@ -130,7 +130,7 @@ void CompletePivotLu::Factorize(const Eigen::MatrixXd& A) {
       if (column_max_[j] > column_max_[pivot_column]) pivot_column = j;
     }
     const double biggest = column_max_[pivot_column];
-    if (!(biggest > 0.0)) {  // the rest is exactly zero (or not a number: Eigen stops there too)
+    if (!(biggest > 0.0)) {  // the rest is exactly zero (a matrix that is not finite gives no direction: Solve)
       nonzero_pivots_ = k;
       for (Eigen::Index i = k; i < n; ++i) row_swaps_[i] = column_swaps_[i] = static_cast<int>(i);
       break;
@@ -181,7 +181,7 @@ void CompletePivotLu::Factorize(const Eigen::MatrixXd& A) {
 
 int CompletePivotLu::rank() const {
   // Eigen's default threshold: a pivot counts if it exceeds epsilon n times the largest.
-  const double threshold = std::abs(max_pivot_) * (Eigen::NumTraits<double>::epsilon() * static_cast<double>(lu_.rows()));
+  const double threshold = max_pivot_ * (Eigen::NumTraits<double>::epsilon() * static_cast<double>(lu_.rows()));
   int rank = 0;
   for (Eigen::Index i = 0; i < nonzero_pivots_; ++i) rank += std::abs(lu_(i, i)) > threshold;
   return rank;

@@ -13,8 +13,8 @@ class DenseLu {
  public:
   // P A = L U in place of a copy of A (square).
   void Factorize(const Eigen::MatrixXd& A);
-  // min |u_ii| / max |u_ii| (1 for an empty matrix): 0 when A is exactly singular or not finite. With |l_ij| <= 1 a ratio that is
-  // not small means A is far from singular; a small one calls for a real condition estimate.
+  // min |u_ii| / max |u_ii| (1 for an empty matrix): 0 when A is exactly singular or not finite. With |l_ij| <= 1 a
+  // ratio that is not small means A is far from singular; a small one calls for a real condition estimate.
   double PivotRatio() const;
   // An estimate of 1 / (|A|_1 |A^-1|_1), the reciprocal condition number, from the factors (a few solves; as
   // LAPACK's dgecon and Eigen's rcond()): 0 when A is singular or not finite.
