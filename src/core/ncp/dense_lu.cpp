@@ -6,6 +6,29 @@
 #include <utility>
 
 namespace implicit_sim {
+namespace {
+
+// Both LUs skip zeros: a contact Jacobian is mostly zeros, and skipping them changes no arithmetic that is done.
+
+// Divides the nonzero entries below the pivot (k, k) of *lu by it and lists their rows in *below; returns how many.
+int ScaleBelowPivot(Eigen::MatrixXd* lu, Eigen::Index k, Eigen::VectorXi* below) {
+  const double pivot = (*lu)(k, k);
+  int reached = 0;
+  for (Eigen::Index i = k + 1; i < lu->rows(); ++i) {
+    if ((*lu)(i, k) == 0.0) continue;
+    (*lu)(i, k) /= pivot;
+    (*below)[reached++] = static_cast<int>(i);
+  }
+  return reached;
+}
+
+// Eliminates column j's entries in the `reached` rows listed in `below` with the multipliers of column k.
+void EliminateColumn(Eigen::MatrixXd* lu, Eigen::Index k, Eigen::Index j, const Eigen::VectorXi& below, int reached) {
+  const double u = (*lu)(k, j);
+  for (int r = 0; r < reached; ++r) (*lu)(below[r], j) -= (*lu)(below[r], k) * u;
+}
+
+}  // namespace
 
 void DenseLu::Factorize(const Eigen::MatrixXd& A) {
   lu_ = A;
@@ -20,21 +43,11 @@ void DenseLu::Factorize(const Eigen::MatrixXd& A) {
     pivot_row += k;
     row_swaps_[k] = static_cast<int>(pivot_row);
     if (pivot_row != k) lu_.row(k).swap(lu_.row(pivot_row));
-    const double pivot = lu_(k, k);
-    if (pivot == 0.0) continue;  // an exactly singular column: nothing to eliminate with
-    // The multipliers below the pivot, and the rows they reach: a contact Jacobian is mostly zeros, and skipping them
-    // changes no arithmetic that is done.
-    int reached = 0;
-    for (Eigen::Index i = k + 1; i < n; ++i) {
-      if (lu_(i, k) == 0.0) continue;
-      lu_(i, k) /= pivot;
-      below_[reached++] = static_cast<int>(i);
-    }
+    if (lu_(k, k) == 0.0) continue;  // an exactly singular column: nothing to eliminate with
+    const int reached = ScaleBelowPivot(&lu_, k, &below_);
     if (reached == 0) continue;
     for (Eigen::Index j = k + 1; j < n; ++j) {
-      const double u = lu_(k, j);
-      if (u == 0.0) continue;
-      for (int r = 0; r < reached; ++r) lu_(below_[r], j) -= lu_(below_[r], k) * u;
+      if (lu_(k, j) != 0.0) EliminateColumn(&lu_, k, j, below_, reached);
     }
   }
 }
@@ -120,8 +133,9 @@ void CompletePivotLu::Factorize(const Eigen::MatrixXd& A) {
   finite_ = lu_.allFinite();
   const Eigen::Index n = lu_.rows();
   Reserve(static_cast<int>(n));  // nothing to do at the size reserved
-  nonzero_pivots_ = n;
+  nonzero_pivots_ = finite_ ? n : 0;
   max_pivot_ = 0.0;
+  if (!finite_) return;  // no direction from a matrix that is not finite (Solve)
   for (Eigen::Index j = 0; j < n; ++j) UpdateColumnMax(j, 0);
   for (Eigen::Index k = 0; k < n; ++k) {
     // The pivot: the largest |entry| of the remaining block, the first in column-major order (Eigen's visitor).
@@ -130,7 +144,7 @@ void CompletePivotLu::Factorize(const Eigen::MatrixXd& A) {
       if (column_max_[j] > column_max_[pivot_column]) pivot_column = j;
     }
     const double biggest = column_max_[pivot_column];
-    if (!(biggest > 0.0)) {  // the rest is exactly zero (a matrix that is not finite gives no direction: Solve)
+    if (!(biggest > 0.0)) {  // the rest is exactly zero
       nonzero_pivots_ = k;
       for (Eigen::Index i = k; i < n; ++i) row_swaps_[i] = column_swaps_[i] = static_cast<int>(i);
       break;
@@ -145,23 +159,15 @@ void CompletePivotLu::Factorize(const Eigen::MatrixXd& A) {
       std::swap(column_max_[k], column_max_[pivot_column]);
       std::swap(column_max_row_[k], column_max_row_[pivot_column]);
     }
-    const double pivot = lu_(k, k);
-    int reached = 0;
-    for (Eigen::Index i = k + 1; i < n; ++i) {
-      if (lu_(i, k) == 0.0) continue;
-      lu_(i, k) /= pivot;
-      below_[reached++] = static_cast<int>(i);
-    }
+    const int reached = ScaleBelowPivot(&lu_, k, &below_);
     for (int r = 0; r < reached; ++r) changed_[below_[r]] = 1;
     for (Eigen::Index j = k + 1; j < n; ++j) {
       // Column j lost row k from its remaining rows, row pivot_row now holds what row k held, and the elimination
-      // changes the reached rows if u != 0. Its maximum stands unless it was in one of those rows (a maximum that row k
-      // held was the first one); a changed row may beat it, or tie with it from an earlier row.
-      const double u = lu_(k, j);
-      const bool touched = reached > 0 && u != 0.0;
-      if (touched) {
-        for (int r = 0; r < reached; ++r) lu_(below_[r], j) -= lu_(below_[r], k) * u;
-      }
+      // changes the reached rows if its pivot-row entry is not 0. Its maximum stands unless it was in one of those
+      // rows (a maximum that row k held was the first one); a changed row may beat it, or tie with it from an earlier
+      // row.
+      const bool touched = reached > 0 && lu_(k, j) != 0.0;
+      if (touched) EliminateColumn(&lu_, k, j, below_, reached);
       const int row = column_max_row_[j];
       if (row == k || row == pivot_row || (touched && changed_[row])) {
         UpdateColumnMax(j, k + 1);
